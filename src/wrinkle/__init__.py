@@ -1,0 +1,18 @@
+"""wrinkle: finite-element analysis of thin membranes that wrinkle.
+
+The method is Roddeman, Drukker, Oomens & Janssen, "The Wrinkling of Thin Membranes, Part II:
+Numerical Analysis", J. Appl. Mech. 54 (1987) 888-892.
+"""
+
+from wrinkle.materials import NeoHookean, StVenantKirchhoff
+from wrinkle.mesh import Mesh, rectangle
+from wrinkle.model import Model, Results
+from wrinkle.solvers import ConvergenceError
+from wrinkle.wrinkling import Wrinkling
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ConvergenceError", "Mesh", "Model", "NeoHookean", "Results", "StVenantKirchhoff",
+    "Wrinkling", "rectangle",
+]

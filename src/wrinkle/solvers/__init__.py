@@ -1,0 +1,24 @@
+"""Nonlinear solvers: the default regularised Newton and the paper's restricted step."""
+
+from wrinkle.solvers.base import ConvergenceError, Evaluation, SolverResult
+from wrinkle.solvers.newton import RegularisedNewton
+from wrinkle.solvers.restricted_step import RestrictedStep
+
+SOLVERS = {"newton": RegularisedNewton, "restricted-step": RestrictedStep}
+
+
+def make_solver(method: str = "newton", tolerance: float = 1e-8, max_iterations: int = 100):
+    """Solver by name: "newton" (default) or "restricted-step"."""
+    try:
+        cls = SOLVERS[method]
+    except KeyError:
+        raise ValueError(
+            f"unknown solver method {method!r}; choose one of {sorted(SOLVERS)}"
+        ) from None
+    return cls(tolerance=tolerance, max_iterations=max_iterations)
+
+
+__all__ = [
+    "ConvergenceError", "Evaluation", "RegularisedNewton", "RestrictedStep", "SolverResult",
+    "make_solver", "SOLVERS",
+]

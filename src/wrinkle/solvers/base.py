@@ -1,0 +1,192 @@
+"""What the nonlinear solvers need from a problem, and what they give back."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+logger = logging.getLogger("wrinkle.solver")
+
+
+@dataclass
+class Evaluation:
+    """A problem evaluated at one displacement vector.
+
+    residual: (n_dofs,) out-of-balance force f - f* (external minus internal), zero at
+        constrained dofs; force units.
+    energy: potential energy (nan where the loads have no potential).
+    force_scale: size of the applied and reaction forces, max(|f_ext|, |reactions|), for the
+        convergence criterion.
+    states: (taut, wrinkled, slack) element counts.
+    stiffness: tangent stiffness dF*/du with constrained rows and columns replaced by the
+        identity, CSR; None unless asked for.
+    """
+
+    residual: np.ndarray
+    energy: float
+    force_scale: float
+    states: tuple[int, int, int]
+    stiffness: sp.csr_matrix | None = None
+
+    @property
+    def residual_norm(self) -> float:
+        return float(np.linalg.norm(self.residual))
+
+
+class Problem(Protocol):
+    """A discretised nonlinear problem with fixed constraints."""
+
+    free: np.ndarray  # (n_dofs,) bool
+
+    def evaluate(self, u: np.ndarray, stiffness: bool = True) -> Evaluation: ...
+
+
+@dataclass
+class SolverResult:
+    """A converged solve: displacements (n_dofs,), iteration count and residual history."""
+
+    u: np.ndarray
+    iterations: int
+    residual_norms: list[float] = field(default_factory=list)
+    evaluation: Evaluation | None = None
+
+
+class ConvergenceError(RuntimeError):
+    """The solver did not converge; ``history`` holds the residual norms it reached."""
+
+    def __init__(self, message: str, history: list[float]):
+        super().__init__(message)
+        self.history = history
+
+
+class EvaluationFailure(RuntimeError):
+    """A trial configuration could not be evaluated (e.g. a collapsed element)."""
+
+
+def try_evaluate(problem: Problem, u: np.ndarray, stiffness: bool = True) -> Evaluation | None:
+    """Evaluate a trial point; None if it is not admissible (the solver then shortens the step)."""
+    try:
+        evaluation = problem.evaluate(u, stiffness=stiffness)
+    except (EvaluationFailure, ArithmeticError, ValueError, RuntimeError) as error:
+        logger.debug("trial point rejected: %s", error)
+        return None
+    if not np.all(np.isfinite(evaluation.residual)):
+        return None
+    return evaluation
+
+
+def is_converged(evaluation: Evaluation, tolerance: float) -> bool:
+    """Residual-force criterion |f - f*| <= tolerance * max(|f_ext|, |reactions|)."""
+    return evaluation.residual_norm <= tolerance * evaluation.force_scale
+
+
+def stiffness_scale(K: sp.csr_matrix, free: np.ndarray) -> float:
+    """Mean absolute diagonal stiffness of the free dofs (1.0 if it is zero)."""
+    diagonal = np.abs(K.diagonal()[free])
+    scale = float(diagonal.mean()) if diagonal.size else 0.0
+    return scale if scale > 0.0 else 1.0
+
+
+def shifted(K: sp.csr_matrix, shift: complex | float, free: np.ndarray) -> sp.csc_matrix:
+    """K + shift I on the free dofs (constrained diagonal stays one), CSC for SuperLU."""
+    return (K + sp.diags(np.where(free, shift, 0.0))).tocsc()
+
+
+def factorise(A: sp.csc_matrix):
+    """Sparse LU of a matrix with symmetric structure (SciPy's SuperLU), or None if singular."""
+    try:
+        return spla.splu(
+            A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.1, options={"SymmetricMode": True}
+        )
+    except RuntimeError as error:  # "Factor is exactly singular"
+        logger.debug("factorisation failed: %s", error)
+        return None
+
+
+def log_iteration(method: str, iteration: int, evaluation: Evaluation, theta: float) -> None:
+    taut, wrinkled, slack = evaluation.states
+    logger.info(
+        "%s iteration %3d: residual %.3e (scale %.3e), theta %.2e, "
+        "taut %d, wrinkled %d, slack %d",
+        method, iteration, evaluation.residual_norm, evaluation.force_scale, theta,
+        taut, wrinkled, slack,
+    )
+
+
+class RegularisedSolver:
+    """Common loop of the two solvers: a regularised step, accepted or not by a gain ratio.
+
+    Each iteration solves for a trial step with regularisation theta, compares the actual
+    decrease of the merit function with the decrease its local model predicts (gain ratio rho)
+    and, as in Fletcher (Practical Methods of Optimization, vol. 1, 1980, section 5.2), accepts
+    the step if rho > 0 and makes theta larger (rho < 0.25) or smaller (rho > 0.75).
+    Subclasses define ``method``, ``trial_step`` and ``merit`` and the theta rules.
+    """
+
+    method = "solver"
+    max_rejections = 40
+
+    def __init__(self, tolerance: float = 1e-8, max_iterations: int = 100):
+        if not tolerance > 0:
+            raise ValueError(f"solver tolerance must be > 0, got {tolerance}")
+        if int(max_iterations) < 1:
+            raise ValueError(f"solver max_iterations must be >= 1, got {max_iterations}")
+        self.tolerance = tolerance
+        self.max_iterations = int(max_iterations)
+
+    # to be defined by subclasses
+    def initial_theta(self, K: sp.csr_matrix, free: np.ndarray) -> float: ...
+
+    def trial_step(self, ev: Evaluation, theta: float, free: np.ndarray): ...
+
+    def gain_ratio(self, ev: Evaluation, trial: Evaluation, predicted: float) -> float: ...
+
+    def increase(self, theta: float) -> float: ...
+
+    def decrease(self, theta: float) -> float: ...
+
+    def solve(self, problem: Problem, u0: np.ndarray) -> SolverResult:
+        """Solve from u0 (prescribed values already set); raise ConvergenceError if it fails."""
+        u = np.array(u0, dtype=float)
+        ev = try_evaluate(problem, u)
+        if ev is None:
+            raise ConvergenceError(f"{self.method}: the starting point cannot be evaluated", [])
+        history = [ev.residual_norm]
+        theta = self.initial_theta(ev.stiffness, problem.free)
+        for iteration in range(self.max_iterations + 1):
+            log_iteration(self.method, iteration, ev, theta)
+            if is_converged(ev, self.tolerance):
+                return SolverResult(u, iteration, history, ev)
+            if iteration == self.max_iterations:
+                break
+            for _ in range(self.max_rejections):
+                step, predicted = self.trial_step(ev, theta, problem.free)
+                trial = None
+                if step is not None and predicted > 0:
+                    trial = try_evaluate(problem, u + step)
+                rho = -np.inf if trial is None else self.gain_ratio(ev, trial, predicted)
+                if rho < 0.25:
+                    theta = self.increase(theta)
+                elif rho > 0.75:
+                    theta = self.decrease(theta)
+                if rho > 0.0:
+                    u = u + step
+                    ev = trial
+                    break
+            else:
+                raise ConvergenceError(
+                    f"{self.method}: no acceptable step after {self.max_rejections} "
+                    f"increases of theta (residual {ev.residual_norm:.3e})",
+                    history,
+                )
+            history.append(ev.residual_norm)
+        raise ConvergenceError(
+            f"{self.method}: not converged in {self.max_iterations} iterations "
+            f"(residual {ev.residual_norm:.3e}, needed {self.tolerance * ev.force_scale:.3e})",
+            history,
+        )

@@ -1,0 +1,54 @@
+"""The paper's restricted-step method (Roddeman et al. 1987, Part II, eq. 45).
+
+Each iteration minimises the linearised residual |f - f* - K du|^2 with a penalty on |du|:
+(2 K^T K + theta I) du = 2 K^T (f - f*). For symmetric K this is
+du = Re[(K - i mu I)^-1 (f - f*)] with mu^2 = theta / 2 (METHOD.md section 7), so one complex
+LU of a matrix with K's own sparsity replaces the much denser K^T K. theta follows Fletcher's
+rules (Practical Methods of Optimization, vol. 1, 1980, section 5.2): the gain ratio
+rho = (|r|^2 - |r_new|^2) / (|r|^2 - |r - K du|^2); theta * 4 if rho < 0.25, theta / 2 if
+rho > 0.75, and theta set to its floor once it falls below a critical value so that the
+iteration ends as Newton's; the step is taken if rho > 0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wrinkle.solvers.base import Evaluation, RegularisedSolver, factorise, shifted, stiffness_scale
+
+_CRITICAL = 1e-8  # relative mu below which theta drops to the floor (Fletcher's nu_c)
+_FLOOR = 1e-12  # relative mu at the floor
+
+
+class RestrictedStep(RegularisedSolver):
+    """Restricted-step (Levenberg-Marquardt) iteration on the residual norm."""
+
+    method = "restricted-step"
+
+    def initial_theta(self, K, free) -> float:
+        self._scale = stiffness_scale(K, free)
+        return 2.0 * (1e-3 * self._scale) ** 2
+
+    def trial_step(self, ev: Evaluation, theta: float, free: np.ndarray):
+        mu = np.sqrt(theta / 2.0)
+        lu = factorise(shifted(ev.stiffness.astype(complex), -1j * mu, free))
+        if lu is None:
+            return None, 0.0
+        step = lu.solve(ev.residual.astype(complex)).real
+        if not np.all(np.isfinite(step)):
+            return None, 0.0
+        r = ev.residual
+        predicted = float(r @ r - np.sum((r - ev.stiffness @ step) ** 2))
+        return step, predicted
+
+    def gain_ratio(self, ev: Evaluation, trial: Evaluation, predicted: float) -> float:
+        return (ev.residual_norm**2 - trial.residual_norm**2) / predicted
+
+    def increase(self, theta: float) -> float:
+        return max(4.0 * theta, 2.0 * (_CRITICAL * self._scale) ** 2)
+
+    def decrease(self, theta: float) -> float:
+        theta = 0.5 * theta
+        if theta < 2.0 * (_CRITICAL * self._scale) ** 2:
+            theta = 2.0 * (_FLOOR * self._scale) ** 2
+        return theta
