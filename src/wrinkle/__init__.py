@@ -7,6 +7,7 @@ Numerical Analysis", J. Appl. Mech. 54 (1987) 888-892.
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.mesh import Mesh, rectangle
 from wrinkle.model import Model, Results
+from wrinkle.point import material_response
 from wrinkle.solvers import ConvergenceError
 from wrinkle.wrinkling import Wrinkling
 
@@ -14,5 +15,5 @@ __version__ = "0.1.0"
 
 __all__ = [
     "ConvergenceError", "Mesh", "Model", "NeoHookean", "Results", "StVenantKirchhoff",
-    "Wrinkling", "rectangle",
+    "Wrinkling", "material_response", "rectangle",
 ]

@@ -36,8 +36,10 @@ class SparsityPattern:
         # node-pair blocks, sorted by (row node, column node)
         row_node = np.repeat(triangles, 3, axis=1)  # (n, 9): a for pairs (k, l)
         col_node = np.tile(triangles, (1, 3))  # (n, 9): b
-        keys, block = np.unique(row_node * n_nodes + col_node, return_inverse=True)
-        block = block.reshape(n, 3, 3)
+        # every node gets its diagonal block, even one that no element uses
+        element_keys = (row_node * n_nodes + col_node).ravel()
+        keys = np.unique(np.concatenate([element_keys, np.arange(n_nodes) * (n_nodes + 1)]))
+        block = np.searchsorted(keys, element_keys).reshape(n, 3, 3)
         block_row = keys // n_nodes
         block_col = keys % n_nodes
         degree = np.bincount(block_row, minlength=n_nodes)

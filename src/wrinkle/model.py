@@ -62,6 +62,16 @@ class Model:
         self.constrained = np.zeros(self.n_dofs, dtype=bool)
         self.prescribed = np.zeros(self.n_dofs)  # displacement at full load
         self.forces = np.zeros(self.n_dofs)  # nodal forces at full load
+        self.force_round_off = self._force_round_off()
+
+    def _force_round_off(self) -> float:
+        """Residual norm that round-off in the strains E = (C - I)/2 alone can produce:
+        100 eps |dN/dE at C = I| (sum over elements of (A0 |grad psi|)^2)^(1/2), force."""
+        g = self.elements.geometry
+        material = self.elements.material.material
+        stiffness = np.linalg.norm(material.response(np.eye(2)[None]).tangent)
+        per_element = g.area * np.linalg.norm(g.shape_gradient.reshape(-1, 6), axis=1)
+        return float(100 * np.finfo(float).eps * stiffness * np.linalg.norm(per_element))
 
     # -- supports and loads -------------------------------------------------------------
     def _node_indices(self, nodes) -> np.ndarray:
@@ -137,7 +147,7 @@ class Model:
         steps: int = 1,
         method: str = "newton",
         tolerance: float = 1e-8,
-        max_iterations: int = 50,
+        max_iterations: int | None = None,
         min_step: float = 1e-4,
         u0: np.ndarray | None = None,
     ) -> Results:
@@ -223,7 +233,7 @@ class StepProblem:
             data[self._constraint_positions] = 0.0
             data[self._constrained_diagonal] = 1.0
             K = model.pattern.matrix(data)
-        return Evaluation(residual, energy, scale, counts, K)
+        return Evaluation(residual, energy, scale, counts, K, model.force_round_off)
 
 
 @dataclass

@@ -205,8 +205,9 @@ class Wrinkling:
         )
         return g, J, s
 
-    def _newton(self, e, phi, b, scale, active):
-        """Newton iterations on the wrinkling conditions for rows ``active`` (in place)."""
+    def _newton(self, e, phi, b, g_tolerance, active):
+        """Newton iterations on the wrinkling conditions for rows ``active`` (in place);
+        converged where |g| <= g_tolerance (m,) or the step is at round-off."""
         converged = np.zeros(phi.shape[0], dtype=bool)
         idx = np.flatnonzero(active)
         for _ in range(_NEWTON_ITERATIONS):
@@ -220,7 +221,7 @@ class Wrinkling:
             small = (np.abs(step[:, 0]) <= 1e-14) & (
                 np.abs(step[:, 1]) <= 1e-14 * (1.0 + np.abs(b[idx]))
             )
-            small |= np.linalg.norm(g, axis=1) <= self.tolerance * scale[idx]
+            small |= np.linalg.norm(g, axis=1) <= g_tolerance[idx]
             done = ok & small
             converged[idx[done]] = True
             idx = idx[ok & ~done]
@@ -229,20 +230,24 @@ class Wrinkling:
     def _solve_conditions(self, C: np.ndarray, plain_stress: np.ndarray):
         """Angle phi and parameter b of the wrinkled elements, (m,), (m,)."""
         e = green_lagrange_voigt(C)
-        scale = np.linalg.norm(plain_stress.reshape(-1, 4), axis=1)
-        scale = np.where(scale > 0.0, scale, 1.0)
+        # |g| can be no smaller than round-off in E = (C - I)/2 times the stiffness
+        stiffness = np.linalg.norm(self.material.response(C, tangent=True).tangent.reshape(-1, 9), axis=1)
+        g_tolerance = np.maximum(
+            self.tolerance * np.linalg.norm(plain_stress.reshape(-1, 4), axis=1),
+            64.0 * np.finfo(float).eps * stiffness,
+        )
         # first guess: the direction of the most compressive plain stress (exact for isotropy),
         # and b from the normal condition w.N'.w = 0 linearised at b = 0
         phi = _minor_direction_angle(plain_stress)
         b = self._linearised_b(e, phi)
-        converged = self._newton(e, phi, b, scale, np.ones(phi.shape, dtype=bool))
-        valid = converged & self._admissible(e, phi, b, scale)
+        converged = self._newton(e, phi, b, g_tolerance, np.ones(phi.shape, dtype=bool))
+        valid = converged & self._admissible(e, phi, b, g_tolerance)
         if not np.all(valid):
             # safeguard: global search over the angle for the least relaxed energy, then Newton
             retry = ~valid
             phi[retry], b[retry] = self._angle_search(e[retry])
-            converged = self._newton(e, phi, b, scale, retry)
-            valid = converged & self._admissible(e, phi, b, scale)
+            converged = self._newton(e, phi, b, g_tolerance, retry)
+            valid[retry] = (converged & self._admissible(e, phi, b, g_tolerance))[retry]
             if not np.all(valid):
                 raise WrinklingError(np.flatnonzero(~valid))
         phi = np.mod(phi, np.pi)
@@ -256,14 +261,14 @@ class Wrinkling:
         Dm = np.einsum("nij,nj->ni", plain.tangent, m)
         return np.maximum(-np.sum(m * s, axis=1) / np.sum(m * Dm, axis=1), 0.0)
 
-    def _admissible(self, e, phi, b, scale) -> np.ndarray:
+    def _admissible(self, e, phi, b, g_tolerance) -> np.ndarray:
         """b >= 0 and non-negative uniaxial tension at a solution, (m,) bool."""
         g, _, s = self._residual_and_jacobian(e, phi, b)
         tension = s[:, 0] + s[:, 1]  # trace of the (rank-one) stress
         return (
             (b >= -1e-12)
-            & (tension >= -1e-12 * scale)
-            & (np.linalg.norm(g, axis=1) <= 1e3 * self.tolerance * scale)
+            & (tension >= -g_tolerance)
+            & (np.linalg.norm(g, axis=1) <= 10.0 * g_tolerance)
         )
 
     def _angle_search(self, e: np.ndarray):

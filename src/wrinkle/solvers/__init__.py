@@ -7,14 +7,17 @@ from wrinkle.solvers.restricted_step import RestrictedStep
 SOLVERS = {"newton": RegularisedNewton, "restricted-step": RestrictedStep}
 
 
-def make_solver(method: str = "newton", tolerance: float = 1e-8, max_iterations: int = 100):
-    """Solver by name: "newton" (default) or "restricted-step"."""
+def make_solver(method: str = "newton", tolerance: float = 1e-8, max_iterations: int | None = None):
+    """Solver by name: "newton" (default) or "restricted-step"; max_iterations None takes the
+    method's default (50 for Newton, 300 for the slower restricted step)."""
     try:
         cls = SOLVERS[method]
     except KeyError:
         raise ValueError(
             f"unknown solver method {method!r}; choose one of {sorted(SOLVERS)}"
         ) from None
+    if max_iterations is None:
+        max_iterations = cls.default_max_iterations
     return cls(tolerance=tolerance, max_iterations=max_iterations)
 
 

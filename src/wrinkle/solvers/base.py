@@ -25,6 +25,8 @@ class Evaluation:
     states: (taut, wrinkled, slack) element counts.
     stiffness: tangent stiffness dF*/du with constrained rows and columns replaced by the
         identity, CSR; None unless asked for.
+    round_off: residual norm that round-off alone can produce (force); a residual below it
+        counts as converged whatever the tolerance.
     """
 
     residual: np.ndarray
@@ -32,6 +34,7 @@ class Evaluation:
     force_scale: float
     states: tuple[int, int, int]
     stiffness: sp.csr_matrix | None = None
+    round_off: float = 0.0
 
     @property
     def residual_norm(self) -> float:
@@ -81,8 +84,11 @@ def try_evaluate(problem: Problem, u: np.ndarray, stiffness: bool = True) -> Eva
 
 
 def is_converged(evaluation: Evaluation, tolerance: float) -> bool:
-    """Residual-force criterion |f - f*| <= tolerance * max(|f_ext|, |reactions|)."""
-    return evaluation.residual_norm <= tolerance * evaluation.force_scale
+    """Residual-force criterion |f - f*| <= tolerance * max(|f_ext|, |reactions|), or a
+    residual at the level of round-off."""
+    return evaluation.residual_norm <= max(
+        tolerance * evaluation.force_scale, evaluation.round_off
+    )
 
 
 def stiffness_scale(K: sp.csr_matrix, free: np.ndarray) -> float:
@@ -129,11 +135,14 @@ class RegularisedSolver:
     """
 
     method = "solver"
+    default_max_iterations = 50
     max_rejections = 40
 
-    def __init__(self, tolerance: float = 1e-8, max_iterations: int = 100):
+    def __init__(self, tolerance: float = 1e-8, max_iterations: int | None = None):
         if not tolerance > 0:
             raise ValueError(f"solver tolerance must be > 0, got {tolerance}")
+        if max_iterations is None:
+            max_iterations = self.default_max_iterations
         if int(max_iterations) < 1:
             raise ValueError(f"solver max_iterations must be >= 1, got {max_iterations}")
         self.tolerance = tolerance

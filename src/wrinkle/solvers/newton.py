@@ -16,13 +16,14 @@ import numpy as np
 from wrinkle.solvers.base import Evaluation, RegularisedSolver, factorise, shifted, stiffness_scale
 
 _THETA_FLOOR = 1e-14
-_ROUND_OFF = 1e-11
+_ROUND_OFF = 1e-12
 
 
 class RegularisedNewton(RegularisedSolver):
     """Trust-region / Levenberg-regularised Newton on the potential energy."""
 
     method = "newton"
+    default_max_iterations = 50
 
     def initial_theta(self, K, free) -> float:
         self._scale = stiffness_scale(K, free)
@@ -40,13 +41,15 @@ class RegularisedNewton(RegularisedSolver):
         return step, float(np.dot(ev.residual, ev.residual) - np.sum((ev.residual - K_step) ** 2))
 
     def gain_ratio(self, ev: Evaluation, trial: Evaluation, predicted: float) -> float:
+        """The better of the energy and residual gain ratios: a step that makes good progress
+        on either merit is taken (energy alone stalls at round-off and at state switches)."""
         energy_model, _ = self._model
+        residual_ratio = (ev.residual_norm**2 - trial.residual_norm**2) / predicted
         actual = ev.energy - trial.energy
         noise = _ROUND_OFF * max(abs(ev.energy), abs(trial.energy))
         if np.isfinite(actual) and energy_model > noise:
-            return actual / energy_model
-        # residual merit and its Gauss-Newton model (``predicted``)
-        return (ev.residual_norm**2 - trial.residual_norm**2) / predicted
+            return max(actual / energy_model, residual_ratio)
+        return residual_ratio
 
     def increase(self, theta: float) -> float:
         return max(10.0 * theta, 1e-10)

@@ -24,6 +24,7 @@ class RestrictedStep(RegularisedSolver):
     """Restricted-step (Levenberg-Marquardt) iteration on the residual norm."""
 
     method = "restricted-step"
+    default_max_iterations = 300
 
     def initial_theta(self, K, free) -> float:
         self._scale = stiffness_scale(K, free)

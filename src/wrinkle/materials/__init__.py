@@ -1,0 +1,28 @@
+"""Membrane materials evaluated on batches of in-plane right Cauchy-Green tensors.
+
+See :mod:`wrinkle.materials.base` for the interface every material follows.
+"""
+
+from wrinkle.materials.base import (
+    Material,
+    MembraneResponse,
+    as_cauchy_green_batch,
+    green_lagrange_voigt,
+    tangent_to_voigt,
+    tensor_from_voigt_stress,
+    voigt_stress,
+)
+from wrinkle.materials.neo_hookean import NeoHookean
+from wrinkle.materials.svk import StVenantKirchhoff
+
+__all__ = [
+    "Material",
+    "MembraneResponse",
+    "NeoHookean",
+    "StVenantKirchhoff",
+    "as_cauchy_green_batch",
+    "green_lagrange_voigt",
+    "tangent_to_voigt",
+    "tensor_from_voigt_stress",
+    "voigt_stress",
+]

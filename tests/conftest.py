@@ -1,0 +1,67 @@
+"""Shared fixtures: every membrane material, with the fibre orientation it is tested in."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from wrinkle.materials import Material, NeoHookean, StVenantKirchhoff
+
+REFERENCE_THICKNESS = 0.1
+
+
+def random_spd_stiffness(seed: int = 5) -> np.ndarray:
+    """A general 6x6 SPD stiffness H = A A^T + 2 I, A standard normal: it couples every
+    in-plane and out-of-plane component (no material symmetry at all)."""
+    A = np.random.default_rng(seed).normal(size=(6, 6))
+    return A @ A.T + 2.0 * np.eye(6)
+
+
+@dataclass(frozen=True)
+class MaterialCase:
+    """A material and the fibre orientation (direction projected on each element, then turned
+    by ``fibre_angle`` radians about the normal) that the element tests use with it."""
+
+    name: str
+    material: Material
+    fibre_direction: tuple[float, float, float]
+    fibre_angle: float
+
+
+def material_cases() -> list[MaterialCase]:
+    D0 = REFERENCE_THICKNESS
+    return [
+        MaterialCase(
+            "svk_isotropic", StVenantKirchhoff.isotropic(E=2.0, nu=0.3, thickness=D0),
+            (1.0, 0.0, 0.0), 0.0,
+        ),
+        MaterialCase(
+            "svk_transversely_isotropic",
+            StVenantKirchhoff.transversely_isotropic(
+                E_L=5.0, E_T=1.0, nu_LT=0.3, nu_TT=0.3, G_LT=1.0 / 2.6, thickness=D0
+            ),
+            (1.0, 0.5, 0.2), 0.4,  # off-axis fibres: about 0.86 rad from the x axis
+        ),
+        MaterialCase(
+            "svk_general", StVenantKirchhoff(random_spd_stiffness(), thickness=D0),
+            (0.3, 1.0, 0.0), -0.3,
+        ),
+        MaterialCase(
+            "neo_hookean_incompressible", NeoHookean(mu=1.5, thickness=D0), (1.0, 0.0, 0.0), 0.0
+        ),
+        MaterialCase(
+            "neo_hookean_compressible", NeoHookean(mu=1.5, thickness=D0, lmbda=4.0),
+            (0.0, 1.0, 0.0), 0.7,
+        ),
+    ]
+
+
+MATERIAL_CASES = material_cases()
+
+
+@pytest.fixture(params=MATERIAL_CASES, ids=[case.name for case in MATERIAL_CASES])
+def material_case(request) -> MaterialCase:
+    """Each material of the package, in turn."""
+    return request.param
