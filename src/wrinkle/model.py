@@ -156,7 +156,8 @@ class Model:
         ``steps`` equal increments of the load factor are the aim; a step that fails is cut in
         half (down to ``min_step``) and the increment grows again after easy steps (at most
         back to 1/steps). Raises ConvergenceError, with the converged steps in its
-        ``results`` attribute, if a step cannot be solved.
+        ``results`` attribute, if a step cannot be solved. ``max_iterations`` None takes the
+        method's default.
         """
         self.check_supports()
         solver = make_solver(method, tolerance, max_iterations)
@@ -171,12 +172,13 @@ class Model:
                 u, solved = self.solve_step(u, trial_factor, solver)
             except ConvergenceError as error:
                 if increment / 2 < min_step:
-                    error.results = results
-                    raise ConvergenceError(
+                    failure = ConvergenceError(
                         f"load step to factor {trial_factor:.6g} failed with increment "
                         f"{increment:.3g} (minimum {min_step:.3g}): {error}",
                         error.history,
-                    ) from error
+                    )
+                    failure.results = results
+                    raise failure from error
                 increment /= 2
                 logger.info("step to %.6g failed; increment cut to %.4g", trial_factor, increment)
                 continue

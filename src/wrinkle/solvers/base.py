@@ -60,11 +60,13 @@ class SolverResult:
 
 
 class ConvergenceError(RuntimeError):
-    """The solver did not converge; ``history`` holds the residual norms it reached."""
+    """The solver did not converge; ``history`` holds the residual norms it reached and
+    ``results`` (set by ``Model.solve``) the load steps that did converge."""
 
     def __init__(self, message: str, history: list[float]):
         super().__init__(message)
         self.history = history
+        self.results = None
 
 
 class EvaluationFailure(RuntimeError):

@@ -55,4 +55,4 @@ class RegularisedNewton(RegularisedSolver):
         return max(10.0 * theta, 1e-10)
 
     def decrease(self, theta: float) -> float:
-        return max(0.1 * theta, _THETA_FLOOR)
+        return max(0.001 * theta, _THETA_FLOOR)

@@ -1,0 +1,117 @@
+"""Nonlinear solvers: quadratic convergence of the default, robustness with slack regions,
+agreement of the two methods, the energy principle for reactions, and clear failure."""
+
+import numpy as np
+import pytest
+
+import wrinkle
+from wrinkle.materials import StVenantKirchhoff
+from wrinkle.solvers import ConvergenceError, make_solver
+
+ANISOTROPIC = StVenantKirchhoff.transversely_isotropic(
+    E_L=5.0, E_T=1.0, nu_LT=0.3, nu_TT=0.3, G_LT=1 / 2.6, thickness=1.0
+)
+# top-edge displacement making the whole membrane taut, or mostly wrinkled
+TOP_DISPLACEMENT = {"taut": (0.05, 0.1, 0.0), "wrinkled": (0.2, 0.02, 0.0)}
+# (with the fibres at 0.5 rad the "taut" case still has a few wrinkled elements)
+
+
+def sheet_model(top_displacement, nx=6):
+    mesh = wrinkle.rectangle(1.0, 1.0, nx, nx)
+    model = wrinkle.Model(mesh, ANISOTROPIC, fibre_angle=0.5)  # fibres off-axis
+    model.fix(mesh.node_sets["bottom"])
+    model.prescribe(mesh.node_sets["top"], top_displacement)
+    return model
+
+
+def solve_history(model, method="newton", tolerance=1e-13, max_iterations=None):
+    solver = make_solver(method, tolerance=tolerance, max_iterations=max_iterations)
+    u, solved = model.solve_step(np.zeros(model.n_dofs), 1.0, solver)
+    return u, solved
+
+
+@pytest.mark.parametrize("state", ["taut", "wrinkled"])
+def test_newton_converges_quadratically(state):
+    """|r_k+1| / |r_k|^2 stays bounded once the iteration is close (consistent tangent).
+    A tangent that misses the variation of the wrinkle direction converges only linearly."""
+    model = sheet_model(TOP_DISPLACEMENT[state])
+    u, solved = solve_history(model)
+    taut, wrinkled, slack = solved.evaluation.states
+    if state == "taut":
+        assert taut > 0.7 * model.mesh.n_elements and slack == 0
+    else:
+        assert wrinkled > 0.8 * model.mesh.n_elements
+    scale = solved.evaluation.force_scale
+    r = np.array(solved.residual_norms) / scale
+    # pairs close to the solution, the second still above the round-off of the wrinkling
+    # solve (relative 1e-13 in the stresses)
+    close = [k for k in range(len(r) - 1) if r[k] < 1e-2 and r[k + 1] > 1e-11]
+    assert len(close) >= 1, r
+    ratios = [r[k + 1] / r[k] ** 2 for k in close]
+    assert max(ratios) < 1e3, (r, ratios)
+    assert solved.iterations <= 15
+
+
+@pytest.mark.parametrize("method", ["newton", "restricted-step"])
+def test_both_solvers_converge_from_undeformed_with_slack_regions(method):
+    """A square pulled up at one node of its top edge, bottom edge held: a tension fan under
+    the node, slack regions beside it. Both solvers start from the flat, undeformed sheet and
+    take the full displacement in one step; the stiffness there is singular."""
+    mesh = wrinkle.rectangle(1.0, 1.0, 8, 8)
+    model = wrinkle.Model(mesh, StVenantKirchhoff.isotropic(E=1.0, nu=0.3, thickness=1.0))
+    model.fix(mesh.node_sets["bottom"])
+    top = mesh.node_sets["top"]
+    pulled = top[top.size // 2]
+    model.prescribe([pulled], (0.0, 0.1, 0.0))
+    u, solved = solve_history(model, method, tolerance=1e-8)
+    taut, wrinkled, slack = solved.evaluation.states
+    assert slack > 0 and wrinkled > 0
+    reaction = model.internal_forces(u).reshape(-1, 3)[pulled]
+    # both methods reach the same equilibrium (reaction force of the pulled node, Newton's)
+    np.testing.assert_allclose(reaction, [-0.00160206, 0.05511688, 0.0], rtol=1e-4, atol=1e-7)
+
+
+def test_methods_agree_on_wrinkled_problem():
+    model = sheet_model(TOP_DISPLACEMENT["wrinkled"])
+    u_newton, _ = solve_history(model, "newton", tolerance=1e-11)
+    u_restricted, _ = solve_history(model, "restricted-step", tolerance=1e-11)
+    np.testing.assert_allclose(u_restricted, u_newton, atol=1e-9)
+
+
+def test_reactions_are_derivative_of_energy():
+    """Energy principle: at equilibrium, d(strain energy)/d(load factor) = R . u_prescribed."""
+    model = sheet_model(TOP_DISPLACEMENT["wrinkled"])
+    solver = make_solver("newton", tolerance=1e-13)
+    energies = {}
+    u = np.zeros(model.n_dofs)
+    for factor in (0.999, 1.001, 1.0):
+        u, solved = model.solve_step(u, factor, solver)
+        energies[factor] = solved.evaluation.energy
+    reactions = model.internal_forces(u)
+    slope = (energies[1.001] - energies[0.999]) / 0.002
+    assert slope == pytest.approx(reactions @ model.prescribed, rel=1e-5)
+
+
+def test_unconverged_solve_raises():
+    model = sheet_model(TOP_DISPLACEMENT["wrinkled"])
+    with pytest.raises(ConvergenceError, match="not converged in 2 iterations"):
+        solve_history(model, max_iterations=2)
+
+
+def test_load_stepping_cuts_back_and_reports_failure():
+    """A step that fails is halved down to min_step; then the error carries the steps done."""
+    model = sheet_model(TOP_DISPLACEMENT["wrinkled"])
+    with pytest.raises(ConvergenceError, match="minimum") as failure:
+        model.solve(steps=1, max_iterations=1, min_step=0.2)
+    assert len(failure.value.results) == 0
+    results = model.solve(steps=4)
+    assert [round(s.load_factor, 12) for s in results.steps] == [0.25, 0.5, 0.75, 1.0]
+    assert results.final.states[1] > 0
+
+
+def test_unsupported_model_is_rejected():
+    mesh = wrinkle.rectangle(1.0, 1.0, 2, 2)
+    model = wrinkle.Model(mesh, ANISOTROPIC)
+    model.fix(mesh.node_sets["bottom"], "xy")
+    with pytest.raises(ValueError, match="no node is supported in z"):
+        model.solve()
