@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from wrinkle import Mesh, Model, NeoHookean, StVenantKirchhoff, rectangle
 from wrinkle.kinematics import deformation_gradient, element_coordinates, right_cauchy_green
@@ -26,12 +27,8 @@ FD_TOLERANCE = 1e-6
 
 
 def rotation(vector) -> np.ndarray:
-    """Rotation matrix about ``vector`` by |vector| radians (Rodrigues)."""
-    vector = np.asarray(vector, dtype=float)
-    angle = np.linalg.norm(vector)
-    k = vector / angle
-    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * K @ K
+    """Rotation matrix about ``vector`` by |vector| radians."""
+    return Rotation.from_rotvec(vector).as_matrix()
 
 
 ROTATION = rotation([0.3, -0.2, 0.5])

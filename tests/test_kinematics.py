@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from wrinkle.kinematics import (
     current_normal,
@@ -23,12 +24,8 @@ N_TRIANGLES = 50
 
 
 def rotation(vector) -> np.ndarray:
-    """Rotation matrix about ``vector`` by |vector| radians (Rodrigues)."""
-    vector = np.asarray(vector, dtype=float)
-    angle = np.linalg.norm(vector)
-    k = vector / angle
-    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * K @ K
+    """Rotation matrix about ``vector`` by |vector| radians."""
+    return Rotation.from_rotvec(vector).as_matrix()
 
 
 def random_triangles(n: int = N_TRIANGLES, seed: int = 0):

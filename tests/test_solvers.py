@@ -35,7 +35,7 @@ def test_newton_converges_quadratically(state):
     """|r_k+1| / |r_k|^2 stays bounded once the iteration is close (consistent tangent).
     A tangent that misses the variation of the wrinkle direction converges only linearly."""
     model = sheet_model(TOP_DISPLACEMENT[state])
-    u, solved = solve_history(model)
+    _, solved = solve_history(model)
     taut, wrinkled, slack = solved.evaluation.states
     if state == "taut":
         assert taut > 0.7 * model.mesh.n_elements and slack == 0
@@ -64,7 +64,7 @@ def test_both_solvers_converge_from_undeformed_with_slack_regions(method):
     pulled = top[top.size // 2]
     model.prescribe([pulled], (0.0, 0.1, 0.0))
     u, solved = solve_history(model, method, tolerance=1e-8)
-    taut, wrinkled, slack = solved.evaluation.states
+    _, wrinkled, slack = solved.evaluation.states
     assert slack > 0 and wrinkled > 0
     reaction = model.internal_forces(u).reshape(-1, 3)[pulled]
     # both methods reach the same equilibrium (reaction force of the pulled node, Newton's)

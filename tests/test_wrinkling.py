@@ -12,7 +12,7 @@ import pytest
 from wrinkle import material_response
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.verification.relaxed_energy import relax
-from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, Wrinkling
+from wrinkle.wrinkling import TAUT, WRINKLED, Wrinkling
 
 RNG = np.random.default_rng(20261122)
 
@@ -148,7 +148,7 @@ def test_isotropic_wrinkle_direction_is_minor_principal_direction_of_C(name):
     material = MATERIALS[name]
     for F in _points_in_state(material, WRINKLED):
         point = material_response(material, F)
-        values, vectors = np.linalg.eigh(F.T @ F)
+        _, vectors = np.linalg.eigh(F.T @ F)
         assert abs(abs(vectors[:, 0] @ point.wrinkle_direction) - 1) < 1e-12
 
 

@@ -22,6 +22,11 @@ def make_solver(method: str = "newton", tolerance: float = 1e-8, max_iterations:
 
 
 __all__ = [
-    "ConvergenceError", "Evaluation", "RegularisedNewton", "RestrictedStep", "SolverResult",
-    "make_solver", "SOLVERS",
+    "SOLVERS",
+    "ConvergenceError",
+    "Evaluation",
+    "RegularisedNewton",
+    "RestrictedStep",
+    "SolverResult",
+    "make_solver",
 ]

@@ -100,7 +100,7 @@ def stiffness_scale(K: sp.csr_matrix, free: np.ndarray) -> float:
     return scale if scale > 0.0 else 1.0
 
 
-def shifted(K: sp.csr_matrix, shift: complex | float, free: np.ndarray) -> sp.csc_matrix:
+def shifted(K: sp.csr_matrix, shift: complex, free: np.ndarray) -> sp.csc_matrix:
     """K + shift I on the free dofs (constrained diagonal stays one), CSC for SuperLU."""
     return (K + sp.diags(np.where(free, shift, 0.0))).tocsc()
 
