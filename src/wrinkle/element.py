@@ -6,6 +6,8 @@ strain-displacement matrix B (dE_voigt = B du, (n, 3, 9)):
 
     f = A0 B^T s,        K = A0 (B^T D B + (grad psi_k . N grad psi_l) I_3),
 
+and the forces are computed as f_k = A0 F N grad psi_k, the same without forming B.
+
 the second term being the geometric (initial-stress) stiffness. Degrees of freedom of an element
 are ordered node by node: (u1x, u1y, u1z, u2x, ..., u3z).
 """
@@ -17,8 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wrinkle.kinematics import ReferenceGeometry, deformation_gradient, right_cauchy_green
-from wrinkle.materials.base import voigt_stress
-from wrinkle.wrinkling import Wrinkling, WrinklingResponse
+from wrinkle.wrinkling import Wrinkling, WrinklingError, WrinklingResponse
 
 
 @dataclass
@@ -37,24 +38,51 @@ class ElementResult:
     energy: np.ndarray
 
 
+# Elements per block: the wrinkling response runs on blocks of _BLOCK elements and the element
+# kernels on sub-blocks of _KERNEL_BLOCK, so that their temporaries stay in the processor caches
+# (and memory stays bounded) on large meshes, while numpy's per-call overhead stays small.
+_BLOCK = 1 << 15
+_KERNEL_BLOCK = 1 << 13
+
+
 def strain_displacement(F: np.ndarray, shape_gradient: np.ndarray) -> np.ndarray:
     """B with dE_voigt = B du: (n, 3, 9); F (n, 3, 2), shape_gradient (n, 3, 2).
 
     dE_ab = (dF_a . F_b + F_a . dF_b) / 2 with dF_a = sum_k du_k dpsi_k/dP_a.
     """
     n = F.shape[0]
-    grad = shape_gradient
     B = np.empty((n, 3, 3, 3))  # (element, strain row, node, component)
-    B[:, 0] = grad[:, :, 0, None] * F[:, None, :, 0]
-    B[:, 1] = grad[:, :, 1, None] * F[:, None, :, 1]
-    B[:, 2] = grad[:, :, 1, None] * F[:, None, :, 0] + grad[:, :, 0, None] * F[:, None, :, 1]
+    for k in range(3):
+        g0, g1 = shape_gradient[:, k, 0], shape_gradient[:, k, 1]
+        for i in range(3):
+            F0, F1 = F[:, i, 0], F[:, i, 1]
+            np.multiply(g0, F0, out=B[:, 0, k, i])
+            np.multiply(g1, F1, out=B[:, 1, k, i])
+            B[:, 2, k, i] = g1 * F0 + g0 * F1
     return B.reshape(n, 3, 9)
 
 
 def element_forces(area: np.ndarray, B: np.ndarray, stress: np.ndarray) -> np.ndarray:
-    """Internal nodal forces A0 B^T s, (n, 9); stress (n, 2, 2) resultant."""
-    s = voigt_stress(stress)
-    return area[:, None] * np.einsum("nri,nr->ni", B, s)
+    """Internal nodal forces A0 B^T s, (n, 9); B (n, 3, 9), stress (n, 2, 2) resultant."""
+    s0, s1, s2 = stress[:, 0, 0], stress[:, 1, 1], stress[:, 0, 1]
+    return area[:, None] * (B[:, 0] * s0[:, None] + B[:, 1] * s1[:, None] + B[:, 2] * s2[:, None])
+
+
+def _nodal_forces(
+    area: np.ndarray, F: np.ndarray, shape_gradient: np.ndarray, stress: np.ndarray, out: np.ndarray
+) -> np.ndarray:
+    """``element_forces`` without forming B: f_k = A0 F N grad psi_k written into out (n, 9).
+
+    area (n,), F (n, 3, 2), shape_gradient (n, 3, 2), stress (n, 2, 2) resultant N.
+    """
+    N00, N11, N01 = area * stress[:, 0, 0], area * stress[:, 1, 1], area * stress[:, 0, 1]
+    for i in range(3):
+        F0, F1 = F[:, i, 0], F[:, i, 1]
+        P0 = F0 * N00 + F1 * N01  # row i of A0 F N
+        P1 = F0 * N01 + F1 * N11
+        for k in range(3):
+            out[:, 3 * k + i] = P0 * shape_gradient[:, k, 0] + P1 * shape_gradient[:, k, 1]
+    return out
 
 
 def element_stiffness(
@@ -63,16 +91,26 @@ def element_stiffness(
     tangent: np.ndarray,
     shape_gradient: np.ndarray,
     stress: np.ndarray,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Consistent tangent stiffness A0 (B^T D B + G (x) I3), (n, 9, 9)."""
-    n = B.shape[0]
-    material = np.matmul(B.transpose(0, 2, 1), np.matmul(tangent, B))
-    geometric = np.matmul(shape_gradient, np.matmul(stress, shape_gradient.transpose(0, 2, 1)))
-    K = material.reshape(n, 3, 3, 3, 3)
-    for i in range(3):
-        K[:, :, i, :, i] += geometric
-    K *= area[:, None, None, None, None]
-    return K.reshape(n, 9, 9)
+    """Consistent tangent stiffness A0 (B^T D B + G (x) I3), (n, 9, 9).
+
+    G_kl = grad psi_k . N grad psi_l is the geometric (initial-stress) part;
+    ``out``: optional (n, 9, 9) array to write into.
+    """
+    K = np.matmul(B.transpose(0, 2, 1), np.matmul(tangent * area[:, None, None], B), out=out)
+    N00, N11, N01 = area * stress[:, 0, 0], area * stress[:, 1, 1], area * stress[:, 0, 1]
+    for k in range(3):
+        gk0, gk1 = shape_gradient[:, k, 0], shape_gradient[:, k, 1]
+        v0 = N00 * gk0 + N01 * gk1  # A0 N grad psi_k
+        v1 = N01 * gk0 + N11 * gk1
+        for l in range(k, 3):
+            G = shape_gradient[:, l, 0] * v0 + shape_gradient[:, l, 1] * v1
+            for i in range(3):
+                K[:, 3 * k + i, 3 * l + i] += G
+                if l != k:
+                    K[:, 3 * l + i, 3 * k + i] += G
+    return K
 
 
 class MembraneElements:
@@ -83,13 +121,70 @@ class MembraneElements:
         self.material = material
 
     def evaluate(self, x_elements: np.ndarray, stiffness: bool = True) -> ElementResult:
-        """Forces (and stiffness) at current node coordinates x_elements, (n, 3, 3)."""
+        """Forces (and stiffness) at current node coordinates x_elements, (n, 3, 3).
+
+        Elements are evaluated block by block (results do not depend on the blocks). Raises
+        WrinklingError listing every element whose wrinkling conditions could not be solved.
+        """
         g = self.geometry
-        F = deformation_gradient(x_elements, g.shape_gradient)
-        response = self.material.response(right_cauchy_green(F), tangent=stiffness)
-        B = strain_displacement(F, g.shape_gradient)
-        forces = element_forces(g.area, B, response.stress)
-        K = None
-        if stiffness:
-            K = element_stiffness(g.area, B, response.tangent, g.shape_gradient, response.stress)
+        n = g.n_elements
+        if n <= _BLOCK:
+            F = deformation_gradient(x_elements, g.shape_gradient)
+            response = self.material.response(right_cauchy_green(F), tangent=stiffness)
+            forces, K = self._forces_and_stiffness(F, slice(0, n), response, stiffness)
+            return ElementResult(F, response, forces, K, g.area * response.energy)
+
+        F = np.empty((n, 3, 2))
+        forces = np.empty((n, 9))
+        K = np.empty((n, 9, 9)) if stiffness else None
+        fields = {
+            "state": np.empty(n, dtype=np.int8),
+            "stress": np.empty((n, 2, 2)),
+            "tangent": np.empty((n, 3, 3)) if stiffness else None,
+            "thickness": np.empty(n),
+            "wrinkle_angle": np.empty(n),
+            "wrinkle_parameter": np.empty(n),
+            "energy": np.empty(n),
+        }
+        failed = []
+        for start in range(0, n, _BLOCK):
+            block = slice(start, min(start + _BLOCK, n))
+            F_block = deformation_gradient(x_elements[block], g.shape_gradient[block])
+            try:
+                r = self.material.response(right_cauchy_green(F_block), tangent=stiffness)
+            except WrinklingError as error:
+                failed.append(error.elements + start)
+                continue
+            except ValueError as error:
+                raise ValueError(f"elements {start} to {block.stop - 1}: {error}") from error
+            F[block] = F_block
+            for name, array in fields.items():
+                if array is not None:
+                    array[block] = getattr(r, name)
+            self._forces_and_stiffness(
+                F_block, block, r, stiffness, forces[block], K[block] if stiffness else None
+            )
+        if failed:
+            raise WrinklingError(np.concatenate(failed))
+        response = WrinklingResponse(**fields)
         return ElementResult(F, response, forces, K, g.area * response.energy)
+
+    def _forces_and_stiffness(self, F, elements, response, stiffness, forces=None, K=None):
+        """Forces (m, 9) and stiffness (m, 9, 9) or None of the block ``elements`` (a slice),
+        written into ``forces`` and ``K`` if given; computed in sub-blocks."""
+        g = self.geometry
+        m = F.shape[0]
+        if forces is None:
+            forces = np.empty((m, 9))
+        if stiffness and K is None:
+            K = np.empty((m, 9, 9))
+        for start in range(0, m, _KERNEL_BLOCK):
+            sub = slice(start, min(start + _KERNEL_BLOCK, m))
+            mesh_sub = slice(elements.start + sub.start, elements.start + sub.stop)
+            area, grad = g.area[mesh_sub], g.shape_gradient[mesh_sub]
+            F_sub, stress = F[sub], response.stress[sub]
+            _nodal_forces(area, F_sub, grad, stress, forces[sub])
+            if stiffness:
+                B = strain_displacement(F_sub, grad)
+                element_stiffness(area, B, response.tangent[sub], grad, stress, out=K[sub])
+        return forces, K if stiffness else None

@@ -1,8 +1,14 @@
-"""Triangle meshes of membranes: nodes, triangles, checks and generators."""
+"""Triangle meshes of membranes: nodes, triangles, named sets, checks, generators and
+reading mesh files through meshio (the optional extra ``wrinkle[io]``)."""
 
 from __future__ import annotations
 
+import contextlib
+import io
+import math
 from dataclasses import dataclass, field
+from numbers import Integral, Real
+from pathlib import Path
 
 import numpy as np
 
@@ -13,13 +19,15 @@ class Mesh:
 
     nodes: (n_nodes, 3) reference coordinates (a (n_nodes, 2) array is taken as z = 0).
     triangles: (n_elements, 3) node indices, counter-clockwise seen from the membrane normal.
-    node_sets: named (k,) arrays of node indices (e.g. physical groups).
-    Raises ValueError naming the element or node at fault.
+    node_sets: named (k,) arrays of node indices (e.g. physical groups, edges).
+    element_sets: named (k,) arrays of element indices (e.g. physical groups of surfaces).
+    Raises ValueError naming the element, node or set at fault.
     """
 
     nodes: np.ndarray
     triangles: np.ndarray
     node_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    element_sets: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self):
         nodes = np.asarray(self.nodes, dtype=float)
@@ -55,7 +63,8 @@ class Mesh:
             raise ValueError(f"elements {dup.tolist()} are duplicates (same three nodes)")
         self.nodes = nodes
         self.triangles = triangles.astype(np.int64)
-        self.node_sets = {name: np.asarray(v, dtype=np.int64) for name, v in self.node_sets.items()}
+        self.node_sets = _checked_sets(self.node_sets, "node", nodes.shape[0])
+        self.element_sets = _checked_sets(self.element_sets, "element", triangles.shape[0])
 
     @property
     def n_nodes(self) -> int:
@@ -64,6 +73,44 @@ class Mesh:
     @property
     def n_elements(self) -> int:
         return self.triangles.shape[0]
+
+
+def _checked_sets(sets: dict, kind: str, count: int) -> dict[str, np.ndarray]:
+    """Named index sets as (k,) int64 arrays, each index checked to lie in 0 .. count - 1.
+
+    kind: "node" or "element", for the messages."""
+    checked = {}
+    for name, values in dict(sets).items():
+        if not isinstance(name, str):
+            raise TypeError(f"{kind} set names must be strings, got {name!r}")
+        indices = np.atleast_1d(np.asarray(values))
+        if indices.ndim != 1:
+            raise ValueError(
+                f"{kind} set {name!r} must be a flat list of {kind} indices, "
+                f"got shape {indices.shape}"
+            )
+        if indices.size == 0:
+            indices = indices.astype(np.int64)
+        if not np.issubdtype(indices.dtype, np.integer):
+            raise ValueError(f"{kind} set {name!r} must hold integer {kind} indices")
+        outside = (indices < 0) | (indices >= count)
+        if np.any(outside):
+            raise ValueError(
+                f"{kind} set {name!r} refers to {kind} {int(indices[outside][0])} "
+                f"outside 0..{count - 1}"
+            )
+        checked[name] = indices.astype(np.int64)
+    return checked
+
+
+def mesh_size(mesh: Mesh) -> float:
+    """Mean length of the mesh edges (each edge shared by two triangles counted once), in
+    the length unit of the nodes: the scale for geometric tolerances."""
+    if mesh.n_elements == 0:
+        raise ValueError("mesh_size: the mesh has no elements")
+    edges = np.sort(mesh.triangles[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2), axis=1)
+    first, second = np.divmod(np.unique(edges[:, 0] * mesh.n_nodes + edges[:, 1]), mesh.n_nodes)
+    return float(np.mean(np.linalg.norm(mesh.nodes[second] - mesh.nodes[first], axis=1)))
 
 
 def rectangle(width: float, height: float, nx: int, ny: int, diagonal: str = "right") -> Mesh:
@@ -94,3 +141,280 @@ def rectangle(width: float, height: float, nx: int, ny: int, diagonal: str = "ri
     grid = np.arange(nodes.shape[0]).reshape(ny + 1, nx + 1)
     sets = {"bottom": grid[0], "top": grid[-1], "left": grid[:, 0], "right": grid[:, -1]}
     return Mesh(nodes, triangles, sets)
+
+
+def _check_count(generator: str, name: str, value, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, Integral) or value < minimum:
+        raise ValueError(f"{generator}: {name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def _check_length(generator: str, name: str, value, allow_zero: bool = False) -> float:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, Real)
+        or not math.isfinite(value)
+        or value < 0
+        or (value == 0 and not allow_zero)
+    ):
+        bound = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{generator}: {name} must be a finite number {bound}, got {value!r}")
+    return float(value)
+
+
+def _polar_rings(radii: np.ndarray, n_circumferential: int) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes on concentric circles and the triangles between consecutive circles.
+
+    radii: (n_rings,) increasing, all > 0. Node (i, j) = i n_circumferential + j sits at radius
+    radii[i], angle 2 pi j / n_circumferential. Each quadrilateral (i, j), (i+1, j),
+    (i+1, j+1), (i, j+1) is split along its diagonal (i, j)-(i+1, j+1) into two triangles,
+    counter-clockwise seen from +z. Returns nodes (n_rings n_circumferential, 3) and
+    triangles (2 (n_rings - 1) n_circumferential, 3)."""
+    angle = 2.0 * np.pi * np.arange(n_circumferential) / n_circumferential
+    r, a = np.meshgrid(radii, angle, indexing="ij")
+    nodes = np.column_stack([(r * np.cos(a)).ravel(), (r * np.sin(a)).ravel(), np.zeros(r.size)])
+    i, j = np.meshgrid(np.arange(radii.size - 1), np.arange(n_circumferential), indexing="ij")
+    inner, inner_next = i * n_circumferential + j, i * n_circumferential + (j + 1) % n_circumferential
+    outer, outer_next = inner + n_circumferential, inner_next + n_circumferential
+    triangles = np.concatenate([
+        np.column_stack([inner.ravel(), outer.ravel(), outer_next.ravel()]),
+        np.column_stack([inner.ravel(), outer_next.ravel(), inner_next.ravel()]),
+    ])
+    return nodes, triangles
+
+
+def annulus(
+    inner_radius: float, outer_radius: float, n_radial: int, n_circumferential: int
+) -> Mesh:
+    """Structured polar mesh of the ring inner_radius <= r <= outer_radius in the plane z = 0.
+
+    n_radial rings of elements of equal radial width, n_circumferential nodes on every circle
+    (the first at angle 0, on the +x axis); each ring sector is split into two triangles,
+    counter-clockwise seen from +z. Node (i, j), on circle i = 0 .. n_radial (from the inside)
+    at angle 2 pi j / n_circumferential, is numbered i n_circumferential + j. Node sets
+    "inner" and "outer" name the two circles. The mesh is the ring between two inscribed
+    polygons: its area is n_circumferential / 2 sin(2 pi / n_circumferential)
+    (outer_radius**2 - inner_radius**2), which tends to pi (outer_radius**2 - inner_radius**2).
+    Use ``disk`` for a full disk (inner radius 0).
+    """
+    inner_radius = _check_length("annulus", "inner_radius", inner_radius, allow_zero=True)
+    outer_radius = _check_length("annulus", "outer_radius", outer_radius)
+    if inner_radius == 0.0:
+        raise ValueError("annulus: inner_radius must be > 0 (use disk for a full disk)")
+    if inner_radius >= outer_radius:
+        raise ValueError(
+            f"annulus: inner_radius must be < outer_radius, got {inner_radius!r} >= "
+            f"{outer_radius!r}"
+        )
+    n_radial = _check_count("annulus", "n_radial", n_radial, 1)
+    n_circumferential = _check_count("annulus", "n_circumferential", n_circumferential, 3)
+    radii = np.linspace(inner_radius, outer_radius, n_radial + 1)
+    nodes, triangles = _polar_rings(radii, n_circumferential)
+    sets = {
+        "inner": np.arange(n_circumferential),
+        "outer": n_radial * n_circumferential + np.arange(n_circumferential),
+    }
+    return Mesh(nodes, triangles, sets)
+
+
+def disk(radius: float, n_radial: int, n_circumferential: int) -> Mesh:
+    """Structured polar mesh of the disk r <= radius in the plane z = 0.
+
+    Node 0 is the centre; circles i = 1 .. n_radial at radius i radius / n_radial carry
+    n_circumferential nodes each, node (i, j) at angle 2 pi j / n_circumferential numbered
+    1 + (i - 1) n_circumferential + j. The first ring is a fan of n_circumferential triangles
+    around the centre, the other rings are split as in ``annulus``; all triangles are
+    counter-clockwise seen from +z. Node set "outer" names the boundary circle. Area:
+    n_circumferential / 2 sin(2 pi / n_circumferential) radius**2 (the inscribed polygon).
+    """
+    radius = _check_length("disk", "radius", radius)
+    n_radial = _check_count("disk", "n_radial", n_radial, 1)
+    n_circumferential = _check_count("disk", "n_circumferential", n_circumferential, 3)
+    radii = radius * np.arange(1, n_radial + 1) / n_radial
+    ring_nodes, ring_triangles = _polar_rings(radii, n_circumferential)
+    first = 1 + np.arange(n_circumferential)
+    fan = np.column_stack([
+        np.zeros(n_circumferential, dtype=np.int64), first, np.roll(first, -1)
+    ])
+    nodes = np.vstack([np.zeros((1, 3)), ring_nodes])
+    triangles = np.vstack([fan, 1 + ring_triangles])
+    sets = {"outer": 1 + (n_radial - 1) * n_circumferential + np.arange(n_circumferential)}
+    return Mesh(nodes, triangles, sets)
+
+
+# -- reading mesh files through meshio ------------------------------------------------------
+
+_SURFACE_CELLS = {"triangle": 1, "quad": 2}  # triangles per cell
+_NODE_GROUP_CELLS = ("vertex", "line")
+_CELL_DIMENSION = {"vertex": 0, "line": 1, "triangle": 2, "quad": 2}
+
+
+def _zero_area_element(nodes: np.ndarray, triangles: np.ndarray) -> int | None:
+    """Index of the first triangle whose area is zero to round-off (|(X2 - X1) x (X3 - X1)|
+    <= 1e-12 times its longest edge squared, as in ``kinematics.reference_geometry``)."""
+    X = nodes[triangles]
+    twice_area = np.linalg.norm(np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]), axis=1)
+    edges = np.stack([X[:, 1] - X[:, 0], X[:, 2] - X[:, 1], X[:, 0] - X[:, 2]], axis=1)
+    size = np.max(np.linalg.norm(edges, axis=2), axis=1)
+    degenerate = np.flatnonzero(~(twice_area > 1e-12 * size**2))
+    return int(degenerate[0]) if degenerate.size else None
+
+
+def read_mesh(path: str | Path) -> Mesh:
+    """Read a triangle mesh from any file meshio reads (gmsh .msh, .vtu, .inp, ...).
+
+    Needs meshio (``pip install "wrinkle[io]"``). Surface cells become elements: "triangle"
+    cells as they are, and every "quad" (nodes a, b, c, d) is split into the two triangles
+    (a, b, c) and (a, c, d) along its diagonal a-c; quad k of a block becomes the two
+    consecutive elements 2k, 2k + 1. Higher-order cells (triangle6, quad8, ...) and volume
+    cells are refused: mesh with linear elements (in gmsh, element order 1). "line" and
+    "vertex" cells only define named node groups. 2-D points get z = 0.
+
+    Named sets: a gmsh physical group (``field_data`` with ``cell_data["gmsh:physical"]``)
+    becomes a node set holding all nodes of its cells (points, lines or surfaces) and, for a
+    surface group, an element set; meshio ``cell_sets`` (e.g. Abaqus ELSET) likewise, and
+    ``point_sets`` (Abaqus NSET) become node sets. Nodes that no element uses are dropped
+    and the others renumbered in file order (a free node would make the stiffness singular);
+    node sets keep only the nodes that remain.
+
+    Raises ValueError naming the file: missing or unreadable file, no triangles,
+    unsupported cell type, zero-area or duplicate element, bad node. Element numbers in
+    messages are the indices of the (split) triangles in file order, node numbers are the
+    file's points counted from 0, both before unused nodes are dropped.
+    """
+    try:
+        import meshio
+    except ImportError:
+        raise ImportError(
+            'reading mesh files needs meshio: pip install "wrinkle[io]"'
+        ) from None
+    path = Path(path)
+    if not path.exists():
+        raise ValueError(f"mesh file {path}: no such file")
+    if not path.is_file():
+        raise ValueError(f"mesh file {path}: not a file")
+    # meshio prints its readers' errors and, when every reader fails, calls sys.exit(1)
+    printed = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(printed):
+            data = meshio.read(path)
+    except (Exception, SystemExit) as error:  # noqa: BLE001 -- readers raise many types
+        if isinstance(error, Exception):
+            lines = str(error).strip().splitlines()
+            reason = lines[0] if lines else type(error).__name__
+        else:  # the readers' messages come before meshio's (line-wrapped) "Error: ..."
+            lines = printed.getvalue().split("Error:")[0].splitlines()
+            formats = meshio.extension_to_filetypes.get(path.suffix.lower(), ["meshio"])
+            reason = "; ".join(
+                [f"not a valid {' or '.join(formats)} file"]
+                + [line.strip() for line in lines if line.strip()]
+            )
+        raise ValueError(f"mesh file {path}: cannot read it ({reason})") from None
+    try:
+        return _mesh_from_meshio(data)
+    except ValueError as error:
+        raise ValueError(f"mesh file {path}: {error}") from None
+
+
+def _mesh_from_meshio(data) -> Mesh:
+    """The wrinkle Mesh of a meshio.Mesh (see ``read_mesh``); ValueError without file name."""
+    points = np.asarray(data.points, dtype=float)
+    if points.ndim != 2 or points.shape[1] not in (2, 3):
+        raise ValueError(f"points must have 2 or 3 coordinates, got shape {points.shape}")
+    n_points = points.shape[0]
+    blocks = [(block.type, np.asarray(block.data)) for block in data.cells]
+
+    # element numbers of each surface cell block: first element, triangles per cell
+    triangle_parts, first_element, n_elements = [], {}, 0
+    for b, (cell_type, cells) in enumerate(blocks):
+        if cell_type in _SURFACE_CELLS:
+            per_cell = _SURFACE_CELLS[cell_type]
+            triangles = cells if per_cell == 1 else cells[:, [0, 1, 2, 0, 2, 3]].reshape(-1, 3)
+            triangle_parts.append(triangles)
+            first_element[b] = n_elements
+            n_elements += triangles.shape[0]
+        elif cell_type not in _NODE_GROUP_CELLS:
+            higher_order = cell_type.rstrip("0123456789") in ("triangle", "quad", "line")
+            raise ValueError(
+                f"cell type {cell_type!r} is not supported"
+                + ("; mesh with linear elements (element order 1)" if higher_order else "")
+                + " (wrinkle reads triangle and quad cells, and line and vertex cells"
+                " for node groups)"
+            )
+        if cells.size and (cells.min() < 0 or cells.max() >= n_points):
+            raise ValueError(
+                f"a {cell_type} cell refers to a point outside 0..{n_points - 1}"
+            )
+    if n_elements == 0:
+        found = sorted({cell_type for cell_type, _ in blocks})
+        raise ValueError(
+            "no triangles in the mesh (cell types: "
+            + (", ".join(found) if found else "none") + ")"
+        )
+    triangles = np.concatenate(triangle_parts).astype(np.int64)
+
+    def elements_of(b: int, cells: np.ndarray) -> np.ndarray:
+        """Element indices of cells (indices into block b); empty for line/vertex blocks."""
+        if b not in first_element:
+            return np.zeros(0, dtype=np.int64)
+        per_cell = _SURFACE_CELLS[blocks[b][0]]
+        return (first_element[b] + per_cell * cells[:, None] + np.arange(per_cell)).ravel()
+
+    node_parts: dict[str, list[np.ndarray]] = {}
+    element_parts: dict[str, list[np.ndarray]] = {}
+
+    def add(name: str, b: int, cells: np.ndarray) -> None:
+        cells = np.asarray(cells, dtype=np.int64).ravel()
+        if cells.size and (cells.min() < 0 or cells.max() >= blocks[b][1].shape[0]):
+            raise ValueError(f"cell set {name!r} refers to a cell that does not exist")
+        node_parts.setdefault(name, []).append(blocks[b][1][cells].ravel())
+        if b in first_element and cells.size:
+            element_parts.setdefault(name, []).append(elements_of(b, cells))
+
+    physical = data.cell_data.get("gmsh:physical")
+    if physical is not None and len(physical) == len(blocks):
+        for name, value in data.field_data.items():
+            tag_dimension = np.asarray(value).ravel()
+            if tag_dimension.size != 2:
+                continue
+            tag, dimension = int(tag_dimension[0]), int(tag_dimension[1])
+            node_parts.setdefault(name, [])
+            for b, (cell_type, _) in enumerate(blocks):
+                if _CELL_DIMENSION.get(cell_type) == dimension:
+                    add(name, b, np.flatnonzero(np.asarray(physical[b]) == tag))
+    for name, per_block in data.cell_sets.items():
+        if name.startswith("gmsh:"):
+            continue
+        if len(per_block) != len(blocks):
+            raise ValueError(
+                f"cell set {name!r} has {len(per_block)} parts for {len(blocks)} cell blocks"
+            )
+        node_parts.setdefault(name, [])
+        for b, cells in enumerate(per_block):
+            if cells is not None:
+                add(name, b, cells)
+    for name, points_in_set in data.point_sets.items():
+        points_in_set = np.asarray(points_in_set, dtype=np.int64).ravel()
+        if points_in_set.size and (points_in_set.min() < 0 or points_in_set.max() >= n_points):
+            raise ValueError(f"point set {name!r} refers to a point outside 0..{n_points - 1}")
+        node_parts.setdefault(name, []).append(points_in_set)
+
+    # checks in the file's numbering, so that the messages point into the file
+    checked = Mesh(points, triangles)
+    bad = _zero_area_element(checked.nodes, triangles)
+    if bad is not None:
+        raise ValueError(f"element {bad} (nodes {triangles[bad].tolist()}) has zero area")
+
+    used = np.unique(triangles)
+    new_number = np.full(n_points, -1, dtype=np.int64)
+    new_number[used] = np.arange(used.size)
+
+    def renumbered(parts: list[np.ndarray]) -> np.ndarray:
+        nodes = new_number[np.concatenate(parts)] if parts else np.zeros(0, dtype=np.int64)
+        return np.unique(nodes[nodes >= 0])
+
+    node_sets = {name: renumbered(parts) for name, parts in node_parts.items()}
+    element_sets = {
+        name: np.unique(np.concatenate(parts)) for name, parts in element_parts.items()
+    }
+    return Mesh(checked.nodes[used], new_number[triangles], node_sets, element_sets)

@@ -19,7 +19,14 @@ import numpy as np
 
 from wrinkle.assembly import DOFS_PER_NODE, SparsityPattern
 from wrinkle.element import ElementResult, MembraneElements
-from wrinkle.kinematics import element_coordinates, reference_geometry
+from wrinkle.kinematics import ReferenceGeometry, element_coordinates, reference_geometry
+from wrinkle.loads import (
+    boundary_edges,
+    edge_dead_forces,
+    edge_follower_forces,
+    pressure_forces,
+    pressure_volume,
+)
 from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh
 from wrinkle.solvers import ConvergenceError, make_solver
@@ -38,40 +45,135 @@ def _component_indices(components: str | Sequence[str]) -> list[int]:
         raise ValueError(f"components must be drawn from 'x', 'y', 'z', got {components!r}") from None
 
 
-class Model:
-    """A membrane model: mesh, material with wrinkling, supports and loads.
+@dataclass
+class Support:
+    """A named set of supported nodes; its reaction is the sum over its nodes."""
 
-    mesh: ``Mesh``; material: a ``Material`` (wrapped in ``Wrinkling``) or a ``Wrinkling``;
-    fibre_direction: (3,) or (n_elements, 3) vector projected onto each element as the
-    material axis 1; fibre_angle: radians (scalar or (n_elements,)) turning it about the normal.
+    label: str
+    nodes: np.ndarray
+
+
+class Model:
+    """A membrane model: mesh, materials with wrinkling, supports and loads.
+
+    mesh: ``Mesh``; material: a ``Material`` (wrapped in ``Wrinkling``) or a ``Wrinkling`` for
+    all elements (or None, then ``assign_material`` for each region); fibre_direction: (3,) or
+    (n_elements, 3) vector projected onto each element as the material axis 1; fibre_angle:
+    radians (scalar or (n_elements,)) turning it about the element normal.
     """
 
     def __init__(
         self,
         mesh: Mesh,
-        material: Material | Wrinkling,
+        material: Material | Wrinkling | None = None,
         fibre_direction: Sequence[float] | np.ndarray = (1.0, 0.0, 0.0),
         fibre_angle: float | np.ndarray = 0.0,
     ):
         self.mesh = mesh
-        wrinkling = material if isinstance(material, Wrinkling) else Wrinkling(material)
-        geometry = reference_geometry(mesh.nodes, mesh.triangles, fibre_direction, fibre_angle)
-        self.elements = MembraneElements(geometry, wrinkling)
+        n = mesh.n_elements
+        self._fibre_direction = np.tile(np.asarray(fibre_direction, dtype=float), (n, 1)) if (
+            np.ndim(fibre_direction) == 1) else np.array(fibre_direction, dtype=float)
+        self._fibre_angle = np.broadcast_to(np.asarray(fibre_angle, dtype=float), (n,)).copy()
+        self._material_of_element = np.full(n, -1)
+        self._materials: list[Wrinkling] = []
+        self._groups = None
         self.pattern = SparsityPattern(mesh.triangles, mesh.n_nodes)
         self.n_dofs = DOFS_PER_NODE * mesh.n_nodes
         self.constrained = np.zeros(self.n_dofs, dtype=bool)
         self.prescribed = np.zeros(self.n_dofs)  # displacement at full load
-        self.forces = np.zeros(self.n_dofs)  # nodal forces at full load
+        self.forces = np.zeros(self.n_dofs)  # dead nodal forces at full load
+        self.supports: list[Support] = []
+        self._pressure = np.zeros(n)  # follower pressure at full load, per element
+        self._edge_follower: list[tuple] = []  # (node triples, q, triangle, local dofs)
+        if material is not None:
+            self.assign_material(material)
+
+    # -- materials ----------------------------------------------------------------------
+    def _element_indices(self, elements) -> np.ndarray:
+        if elements is None:
+            return np.arange(self.mesh.n_elements)
+        elements = np.atleast_1d(np.asarray(elements))
+        if elements.dtype == bool:
+            elements = np.flatnonzero(elements)
+        if elements.size == 0:
+            raise ValueError("no elements selected")
+        bad = (elements < 0) | (elements >= self.mesh.n_elements)
+        if np.any(bad):
+            raise ValueError(
+                f"element {elements[bad][0]} does not exist (mesh has {self.mesh.n_elements})"
+            )
+        return elements.astype(np.int64)
+
+    def assign_material(
+        self,
+        material: Material | Wrinkling,
+        elements=None,
+        fibre_direction: Sequence[float] | np.ndarray | None = None,
+        fibre_angle: float | np.ndarray | None = None,
+    ) -> None:
+        """Give ``elements`` (indices or mask; None = all) a material and, optionally, their
+        own fibre direction ((3,) or (k, 3)) and angle (radians)."""
+        elements = self._element_indices(elements)
+        wrinkling = material if isinstance(material, Wrinkling) else Wrinkling(material)
+        self._materials.append(wrinkling)
+        self._material_of_element[elements] = len(self._materials) - 1
+        if fibre_direction is not None:
+            self._fibre_direction[elements] = fibre_direction
+        if fibre_angle is not None:
+            self._fibre_angle[elements] = fibre_angle
+        self._groups = None
+
+    def _build(self) -> None:
+        missing = np.flatnonzero(self._material_of_element < 0)
+        if missing.size:
+            raise ValueError(
+                f"{missing.size} element(s) have no material, first: element {missing[0]}"
+            )
+        self._geometry = reference_geometry(
+            self.mesh.nodes, self.mesh.triangles, self._fibre_direction, self._fibre_angle
+        )
+        groups = []
+        for index, material in enumerate(self._materials):
+            elements = np.flatnonzero(self._material_of_element == index)
+            if elements.size:
+                groups.append((elements, MembraneElements(self._geometry.subset(elements), material)))
+        self._groups = groups
+        order = np.concatenate([e for e, _ in groups])
+        self._inverse_order = np.argsort(order) if len(groups) > 1 else None
         self.force_round_off = self._force_round_off()
+
+    @property
+    def geometry(self) -> ReferenceGeometry:
+        """Reference geometry (areas, frames, shape gradients) of all elements."""
+        if self._groups is None:
+            self._build()
+        return self._geometry
+
+    @property
+    def groups(self) -> list[tuple[np.ndarray, MembraneElements]]:
+        """(element indices, MembraneElements) of each material."""
+        if self._groups is None:
+            self._build()
+        return self._groups
+
+    @property
+    def elements(self) -> MembraneElements:
+        """The elements of a single-material model."""
+        if len(self.groups) != 1:
+            raise ValueError("the model has several materials: use model.groups")
+        return self.groups[0][1]
 
     def _force_round_off(self) -> float:
         """Residual norm that round-off in the strains E = (C - I)/2 alone can produce:
         100 eps |dN/dE at C = I| (sum over elements of (A0 |grad psi|)^2)^(1/2), force."""
-        g = self.elements.geometry
-        material = self.elements.material.material
-        stiffness = np.linalg.norm(material.response(np.eye(2)[None]).tangent)
-        per_element = g.area * np.linalg.norm(g.shape_gradient.reshape(-1, 6), axis=1)
-        return float(100 * np.finfo(float).eps * stiffness * np.linalg.norm(per_element))
+        total = 0.0
+        for _, elements in self._groups:
+            g = elements.geometry
+            material = elements.material.material
+            stiffness = np.linalg.norm(material.response(np.eye(2)[None]).tangent)
+            per_element = g.area * np.linalg.norm(g.shape_gradient.reshape(-1, 6), axis=1)
+            total += (stiffness * np.linalg.norm(per_element)) ** 2
+        return float(100 * np.finfo(float).eps * np.sqrt(total))
 
     # -- supports and loads -------------------------------------------------------------
     def _node_indices(self, nodes) -> np.ndarray:
@@ -85,14 +187,18 @@ class Model:
             raise ValueError(f"node {nodes[bad][0]} does not exist (mesh has {self.mesh.n_nodes})")
         return nodes.astype(np.int64)
 
-    def fix(self, nodes, components: str | Sequence[str] = "xyz") -> None:
+    def _add_support(self, nodes: np.ndarray, label: str | None) -> None:
+        self.supports.append(Support(label or f"support {len(self.supports) + 1}", nodes))
+
+    def fix(self, nodes, components: str | Sequence[str] = "xyz", label: str | None = None) -> None:
         """Hold the given displacement components of ``nodes`` at zero."""
         nodes = self._node_indices(nodes)
         for c in _component_indices(components):
             self.constrained[DOFS_PER_NODE * nodes + c] = True
             self.prescribed[DOFS_PER_NODE * nodes + c] = 0.0
+        self._add_support(nodes, label)
 
-    def prescribe(self, nodes, displacement) -> None:
+    def prescribe(self, nodes, displacement, label: str | None = None) -> None:
         """Prescribe displacements reached at load factor 1.
 
         displacement: (3,) for all nodes or (k, 3) per node; a NaN component is left free.
@@ -103,6 +209,7 @@ class Model:
         set_ = ~np.isnan(values)
         self.constrained[dofs[set_]] = True
         self.prescribed[dofs[set_]] = values[set_]
+        self._add_support(nodes, label)
 
     def add_nodal_force(self, nodes, force) -> None:
         """Add a dead nodal force (3,) or (k, 3), reached at load factor 1."""
@@ -112,29 +219,144 @@ class Model:
             raise ValueError("nodal force must be finite")
         np.add.at(self.forces, DOFS_PER_NODE * nodes[:, None] + np.arange(3), values)
 
+    def add_pressure(self, value: float, elements=None) -> None:
+        """Follower pressure (force per unit current area) on ``elements`` (None = all),
+        positive along the element normal (x2 - x1) x (x3 - x1), reached at load factor 1."""
+        if not np.isfinite(value):
+            raise ValueError("pressure must be finite")
+        self._pressure[self._element_indices(elements)] += value
+
+    def add_gravity(self, acceleration, density: float, elements=None) -> None:
+        """Dead weight density * reference thickness * A0 * acceleration, a third to each
+        node; acceleration (3,) (length / time^2), density mass per unit volume."""
+        if not density > 0:
+            raise ValueError(f"density must be > 0, got {density}")
+        elements = self._element_indices(elements)
+        thickness = np.array([m.thickness for m in self._materials])[
+            self._material_of_element[elements]
+        ]
+        area = self.geometry.area[elements]
+        weight = (density * thickness * area / 3.0)[:, None] * np.asarray(acceleration, float)
+        for k in range(3):
+            np.add.at(self.forces.reshape(-1, 3), self.mesh.triangles[elements, k], weight)
+
+    def add_edge_load(self, nodes, traction=None, normal: float | None = None,
+                      follow: bool = False) -> None:
+        """Load on the boundary edges whose two nodes are both in ``nodes``.
+
+        traction: (3,) dead force per unit reference length; normal: force per unit length
+        along the edge's outward normal in the membrane plane, positive pulling outwards (dead:
+        per reference length, reference direction; follow=True: per current length, turning
+        with the deformed edge).
+        """
+        nodes = self._node_indices(nodes)
+        selected = np.zeros(self.mesh.n_nodes, dtype=bool)
+        selected[nodes] = True
+        triples, owner = boundary_edges(self.mesh.triangles)
+        chosen = selected[triples[:, 0]] & selected[triples[:, 1]]
+        triples, owner = triples[chosen], owner[chosen]
+        if triples.shape[0] == 0:
+            raise ValueError("the selected nodes contain no boundary edge")
+        if (traction is None) == (normal is None):
+            raise ValueError("an edge load needs either traction or normal")
+        X = self.mesh.nodes[triples]
+        length = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
+        if normal is not None and follow:
+            # place of the edge's nodes (a, b, third) in their triangle's dofs, for the stiffness
+            position = np.argmax(self.mesh.triangles[owner][:, None, :] == triples[:, :, None], 2)
+            dofs = (3 * position[:, :, None] + np.arange(3)).reshape(-1, 9)
+            self._edge_follower.append(
+                (triples, np.full(triples.shape[0], float(normal)), owner, dofs)
+            )
+            return
+        if normal is not None:
+            forces, _ = edge_follower_forces(X, np.full(triples.shape[0], float(normal)), False)
+            forces = forces[:, :6]
+        else:
+            traction = np.broadcast_to(np.asarray(traction, dtype=float), (triples.shape[0], 3))
+            forces = edge_dead_forces(length, traction)
+        for k in range(2):
+            np.add.at(self.forces.reshape(-1, 3), triples[:, k], forces[:, 3 * k:3 * k + 3])
+
+    @property
+    def has_follower_loads(self) -> bool:
+        return bool(np.any(self._pressure != 0) or self._edge_follower)
+
     # -- evaluation ---------------------------------------------------------------------
     def evaluate_elements(self, u: np.ndarray, stiffness: bool = True) -> ElementResult:
         """Element forces, stiffness and states at displacements u, (n_dofs,)."""
-        x = self.mesh.nodes + u.reshape(-1, 3)
+        x = element_coordinates(self.mesh.nodes + u.reshape(-1, 3), self.mesh.triangles)
+        groups = self.groups
         try:
-            return self.elements.evaluate(
-                element_coordinates(x, self.mesh.triangles), stiffness=stiffness
-            )
+            results = [elements.evaluate(x[index], stiffness=stiffness) for index, elements in groups]
         except WrinklingError as error:
             raise EvaluationFailure(str(error)) from error
+        if len(results) == 1:
+            return results[0]
+        return _concatenate_results(results, self._inverse_order)
+
+    def follower_forces(self, u: np.ndarray, load_factor: float, stiffness: bool = True):
+        """Assembled follower loads at u: forces (n_dofs,) and d f / d u data (element-wise
+        (n, 9, 9) on the triangles, or None)."""
+        x_nodes = self.mesh.nodes + u.reshape(-1, 3)
+        forces = np.zeros(self.n_dofs)
+        K = None
+        loaded = np.flatnonzero(self._pressure)
+        if loaded.size:
+            x = x_nodes[self.mesh.triangles[loaded]]
+            f, k = pressure_forces(x, load_factor * self._pressure[loaded], stiffness)
+            forces += np.bincount(self.pattern.element_dofs[loaded].ravel(), f.ravel(),
+                                  minlength=self.n_dofs)
+            if stiffness:
+                K = np.zeros((self.mesh.n_elements, 9, 9))
+                K[loaded] = k
+        for triples, q, owner, local_dofs in self._edge_follower:
+            f, k = edge_follower_forces(x_nodes[triples], load_factor * q, stiffness)
+            dofs = (3 * triples[:, :, None] + np.arange(3)).reshape(-1, 9)
+            forces += np.bincount(dofs.ravel(), f.ravel(), minlength=self.n_dofs)
+            if stiffness:
+                if K is None:
+                    K = np.zeros((self.mesh.n_elements, 9, 9))
+                in_triangle = np.empty_like(k)
+                rows = np.arange(k.shape[0])[:, None, None]
+                in_triangle[rows, local_dofs[:, :, None], local_dofs[:, None, :]] = k
+                np.add.at(K, owner, in_triangle)
+        return forces, K
+
+    def pressure_work(self, u: np.ndarray) -> float:
+        """Sum of p V_cone over the pressurised elements at full load (``pressure_volume``):
+        the pressure's potential is minus this; exact when the boundary is held or moves in
+        planes through the origin (symmetry planes), otherwise a merit for the solver only."""
+        loaded = np.flatnonzero(self._pressure)
+        if loaded.size == 0:
+            return 0.0
+        x = (self.mesh.nodes + u.reshape(-1, 3))[self.mesh.triangles[loaded]]
+        return float(self._pressure[loaded] @ pressure_volume(x))
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
         """Global internal force vector f*, (n_dofs,)."""
         return self.pattern.assemble_vector(self.evaluate_elements(u, stiffness=False).forces)
 
+    def reactions(self, u: np.ndarray, load_factor: float) -> np.ndarray:
+        """Support reactions f* - f_ext at the constrained dofs (zero elsewhere), (n_dofs,)."""
+        external = load_factor * self.forces
+        if self.has_follower_loads:
+            external = external + self.follower_forces(u, load_factor, stiffness=False)[0]
+        return np.where(self.constrained, self.internal_forces(u) - external, 0.0)
+
+    def support_reactions(self, reactions: np.ndarray) -> dict[str, list[float]]:
+        """Sum of the reactions (n_dofs,) over each support's nodes: label -> [Fx, Fy, Fz]."""
+        per_node = reactions.reshape(-1, 3)
+        return {s.label: per_node[s.nodes].sum(axis=0).tolist() for s in self.supports}
+
     def problem(self, load_factor: float = 1.0, prescribed: np.ndarray | None = None):
         """The nonlinear problem at one load level (see ``StepProblem``)."""
         if prescribed is None:
             prescribed = load_factor * self.prescribed
-        return StepProblem(self, load_factor * self.forces, prescribed)
+        return StepProblem(self, load_factor, prescribed)
 
     def check_supports(self) -> None:
-        """Raise ValueError if no displacement component is supported at all."""
+        """Raise ValueError if a displacement component is supported nowhere."""
         for c, name in enumerate("xyz"):
             if not np.any(self.constrained[c::3]):
                 raise ValueError(
@@ -150,15 +372,18 @@ class Model:
         max_iterations: int | None = None,
         min_step: float = 1e-4,
         u0: np.ndarray | None = None,
+        on_step=None,
     ) -> Results:
         """Proportional stepping of loads and prescribed displacements from 0 to 1.
 
         ``steps`` equal increments of the load factor are the aim; a step that fails is cut in
         half (down to ``min_step``) and the increment grows again after easy steps (at most
-        back to 1/steps). Raises ConvergenceError, with the converged steps in its
-        ``results`` attribute, if a step cannot be solved. ``max_iterations`` None takes the
-        method's default.
+        back to 1/steps). ``on_step(step_result)`` is called after each converged step.
+        Raises ConvergenceError, with the converged steps in its ``results`` attribute, if a
+        step cannot be solved. ``max_iterations`` None takes the method's default.
         """
+        if int(steps) < 1:
+            raise ValueError(f"steps must be >= 1, got {steps}")
         self.check_supports()
         solver = make_solver(method, tolerance, max_iterations)
         u = np.zeros(self.n_dofs) if u0 is None else np.array(u0, dtype=float)
@@ -183,10 +408,12 @@ class Model:
                 logger.info("step to %.6g failed; increment cut to %.4g", trial_factor, increment)
                 continue
             factor = trial_factor
-            results.append(factor, u, solved)
+            step = results.append(factor, u, solved)
             logger.info(
                 "load factor %.6g converged in %d iterations", factor, solved.iterations
             )
+            if on_step is not None:
+                on_step(step)
             if solved.iterations <= 6 and increment < target:
                 increment = min(target, 2 * increment)
         return results
@@ -199,18 +426,42 @@ class Model:
         return solved.u, solved
 
 
+def _concatenate_results(results: list[ElementResult], inverse: np.ndarray) -> ElementResult:
+    """Element results of several material groups in mesh order."""
+
+    def join(values):
+        if values[0] is None:
+            return None
+        return np.concatenate(values)[inverse]
+
+    responses = [r.response for r in results]
+    response = type(responses[0])(
+        **{name: join([getattr(r, name) for r in responses])
+           for name in responses[0].__dataclass_fields__}
+    )
+    return ElementResult(
+        join([r.deformation_gradient for r in results]),
+        response,
+        join([r.forces for r in results]),
+        join([r.stiffness for r in results]),
+        join([r.energy for r in results]),
+    )
+
+
 class StepProblem:
     """Residual, stiffness and potential energy at one load level (the solvers' ``Problem``).
 
-    forces: (n_dofs,) external nodal forces; prescribed: (n_dofs,) values of the constrained
-    displacement components.
+    load_factor scales the dead forces and the follower loads; prescribed: (n_dofs,) values of
+    the constrained displacement components.
     """
 
-    def __init__(self, model: Model, forces: np.ndarray, prescribed: np.ndarray):
+    def __init__(self, model: Model, load_factor: float, prescribed: np.ndarray):
         self.model = model
-        self.forces = forces
+        self.load_factor = load_factor
+        self.forces = load_factor * model.forces
         self.prescribed = prescribed
         self.free = ~model.constrained
+        self.symmetric = not model.has_follower_loads
         pattern = model.pattern
         self._constraint_positions = pattern.constraint_positions(model.constrained)
         self._constrained_diagonal = pattern.diagonal[model.constrained]
@@ -219,10 +470,20 @@ class StepProblem:
         model = self.model
         result = model.evaluate_elements(u, stiffness=stiffness)
         internal = model.pattern.assemble_vector(result.forces)
-        residual = np.where(self.free, self.forces - internal, 0.0)
-        reactions = internal[~self.free] - self.forces[~self.free]
-        scale = max(np.linalg.norm(self.forces), np.linalg.norm(reactions))
+        external = self.forces
+        element_stiffness = result.stiffness
         energy = float(np.sum(result.energy) - self.forces @ u)
+        if model.has_follower_loads:
+            follower, load_stiffness = model.follower_forces(u, self.load_factor, stiffness)
+            external = external + follower
+            energy -= self.load_factor * model.pressure_work(u)
+            if model._edge_follower:
+                energy = np.nan  # follower edge loads have no potential
+            if stiffness and load_stiffness is not None:
+                element_stiffness = element_stiffness - load_stiffness
+        residual = np.where(self.free, external - internal, 0.0)
+        reactions = internal[~self.free] - external[~self.free]
+        scale = max(np.linalg.norm(external), np.linalg.norm(reactions))
         state = result.response.state
         counts = (
             int(np.count_nonzero(state == TAUT)),
@@ -231,11 +492,13 @@ class StepProblem:
         )
         K = None
         if stiffness:
-            data = model.pattern.assemble_data(result.stiffness)
+            data = model.pattern.assemble_data(element_stiffness)
             data[self._constraint_positions] = 0.0
             data[self._constrained_diagonal] = 1.0
             K = model.pattern.matrix(data)
-        return Evaluation(residual, energy, scale, counts, K, model.force_round_off)
+        return Evaluation(
+            residual, energy, scale, counts, K, model.force_round_off, self.symmetric
+        )
 
 
 @dataclass
@@ -257,14 +520,20 @@ class Results:
         self.model = model
         self.steps: list[StepResult] = []
 
-    def append(self, load_factor: float, u: np.ndarray, solved) -> None:
+    def append(self, load_factor: float, u: np.ndarray, solved) -> StepResult:
         ev = solved.evaluation
-        internal = self.model.internal_forces(u)
-        reactions = np.where(self.model.constrained, internal - load_factor * self.model.forces, 0)
-        self.steps.append(
-            StepResult(load_factor, u.copy(), solved.iterations, ev.residual_norm, reactions,
-                       ev.states)
+        step = StepResult(
+            load_factor, u.copy(), solved.iterations, ev.residual_norm,
+            self.model.reactions(u, load_factor), ev.states,
         )
+        self.steps.append(step)
+        return step
+
+    def save(self, directory, probes=None, units=None) -> None:
+        """Write every step (ParaView files, summary.json, history.csv) into ``directory``."""
+        from wrinkle.output import save_results
+
+        save_results(self, directory, probes=probes, units=units)
 
     @property
     def final(self) -> StepResult:

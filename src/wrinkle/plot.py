@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import csv
+import json
+import os
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -65,3 +69,232 @@ def plot_shear_stretch(rows, path: Path, shear: float) -> None:
     axes[1].legend(fontsize=7, ncol=3, loc="upper left")
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+STATE_COLOURS = {"taut": "#3a78b5", "wrinkled": "#f5a623", "slack": "#cfcfcf"}
+AXIS_NAMES = "xyz"
+
+
+def _unit(units: dict, quantity: str) -> str:
+    """Unit of "length", "force" or "stress" (force per length unless given) from the
+    summary's units, or "" if not known."""
+    if quantity == "stress" and "stress" not in units and "force" in units and "length" in units:
+        return f"{units['force']}/{units['length']}"
+    return units.get(quantity, "")
+
+
+def _with_unit(label: str, unit: str) -> str:
+    return f"{label} ({unit})" if unit else label
+
+
+def _read_history(path: Path) -> tuple[list[str], np.ndarray]:
+    with open(path, newline="", encoding="utf-8") as handle:
+        rows = list(csv.reader(handle))
+    header = rows[0]
+    values = np.array([[float(v) for v in row] for row in rows[1:]]).reshape(-1, len(header))
+    return header, values
+
+
+def _stop_note(message: str) -> str:
+    """Short note for a run that did not converge (the full message is in summary.json)."""
+    return "running" if message == "running" else "stopped: " + textwrap.shorten(message, 60)
+
+
+def _view_axes(x: np.ndarray) -> tuple[int, int]:
+    """The two coordinate axes with the largest extents of the points x (n, 3), in order."""
+    extent = x.max(axis=0) - x.min(axis=0)
+    return tuple(sorted(np.argsort(extent)[-2:].tolist()))
+
+
+def _tension_lines(
+    x: np.ndarray, triangles: np.ndarray, tension: np.ndarray, axes: tuple[int, int],
+    lines_across: int = 45,
+) -> tuple[np.ndarray, bool]:
+    """Tension-field line segments (k, 2, 2) in the view plane ``axes`` through the centroids
+    of the wrinkled elements ``triangles`` (k, 3) of the deformed mesh x (n, 3), along their
+    tension directions (k, 3), 0.7 of the element size sqrt(2 A) long.
+
+    Where the elements are smaller than 1/``lines_across`` of the view, the lines would merge
+    into a texture: then one element per square of that size is drawn (the one nearest the
+    square's centre) with a line 0.7 of the square long; the flag returned says so.
+    """
+    corners = x[triangles]  # (k, 3, 3)
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    size = np.sqrt(np.linalg.norm(normal, axis=1))  # sqrt(2 A): the side of a half square
+    centre = corners.mean(axis=1)[:, axes]
+    direction = tension[:, axes]
+    low = x[:, axes].min(axis=0)
+    square = np.ptp(x[:, axes], axis=0).max() / lines_across
+    sampled = triangles.shape[0] > 0 and float(np.median(size)) < square
+    if sampled:
+        key = np.floor((centre - low) / square).astype(np.int64)
+        distance = np.linalg.norm(centre - low - (key + 0.5) * square, axis=1)
+        order = np.lexsort((distance, key[:, 1], key[:, 0]))
+        _, first = np.unique(key[order], axis=0, return_index=True)
+        keep = order[first]
+        centre, direction = centre[keep], direction[keep]
+        size = np.full(keep.size, square)
+    half = 0.35 * size[:, None] * direction
+    return np.stack([centre - half, centre + half], axis=1), sampled
+
+
+def _map_axes(plt, xy: np.ndarray, axes: tuple[int, int], length_unit: str, width: float = 7.5):
+    """A figure with one axes sized to the projected membrane xy (n, 2), equal aspect."""
+    span = np.ptp(xy, axis=0)
+    aspect = float(np.clip(span[1] / span[0], 0.25, 2.0)) if span[0] > 0 else 1.0
+    fig, ax = plt.subplots(figsize=(width, 1.3 + (width - 2.4) * aspect), layout="constrained")
+    ax.set_aspect("equal")
+    ax.set_xlabel(_with_unit(AXIS_NAMES[axes[0]], length_unit))
+    ax.set_ylabel(_with_unit(AXIS_NAMES[axes[1]], length_unit))
+    margin = 0.03 * max(span.max(), 1e-300)
+    ax.set_xlim(xy[:, 0].min() - margin, xy[:, 0].max() + margin)
+    ax.set_ylim(xy[:, 1].min() - margin, xy[:, 1].max() + margin)
+    return fig, ax
+
+
+def plot_results(out_dir: str | os.PathLike) -> list[Path]:
+    """Pictures of the results that ``wrinkle.output.ResultWriter`` wrote into ``out_dir``.
+
+    Reads the last step's .vtu, summary.json and history.csv and writes into ``out_dir``:
+    ``state.png``, the deformed membrane (reference + displacement, true scale) projected onto
+    the plane of the two coordinate axes along which it extends most (named on the axes),
+    elements coloured taut / wrinkled / slack, with a tension-field line through the centroid
+    of every wrinkled element along its tension direction (0.7 of the element size);
+    ``principal_stress.png``, the major principal Cauchy stress resultant (force per current
+    length) on the same view; ``load_displacement.png``, the mean displacement of each probe
+    (magnitude and components) against the load factor, or the largest nodal displacement
+    if there are no probes. Returns the paths of the three files.
+    """
+    from wrinkle.output import HISTORY, STATE_NAMES, SUMMARY, _meshio
+
+    out_dir = Path(out_dir)
+    summary = json.loads((out_dir / SUMMARY).read_text(encoding="utf-8"))
+    if not summary["steps"]:
+        raise ValueError(f"{out_dir / SUMMARY}: no converged step to plot")
+    last = summary["steps"][-1]
+    units = summary.get("units") or {}
+    length_unit = _unit(units, "length")
+    vtu = _meshio().read(out_dir / last["file"])
+    triangles = vtu.cells_dict["triangle"]
+    cell = {name: vtu.cell_data_dict[name]["triangle"] for name in vtu.cell_data}
+    x = vtu.points + vtu.point_data["displacement"]
+    axes = _view_axes(x)
+    xy = x[:, axes]
+    plt = _pyplot()
+    from matplotlib.collections import LineCollection, PolyCollection
+    from matplotlib.colors import to_rgba_array
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    n_elements = triangles.shape[0]
+    fine = n_elements > 3000  # thin lines, no element edges: they would hide the colours
+    view = (
+        f"projected on the {AXIS_NAMES[axes[0]]}{AXIS_NAMES[axes[1]]}-plane "
+        f"(seen along {AXIS_NAMES[3 - sum(axes)]})"
+    )
+    step_title = f"load factor {last['load_factor']:.4g}"
+    if not summary["converged"]:
+        step_title += " (" + _stop_note(summary["message"]) + ")"
+    written = []
+
+    # -- taut / wrinkled / slack, with the tension field --------------------------------------
+    fig, ax = _map_axes(plt, xy, axes, length_unit, width=8.5)
+    state = cell["state"].astype(int)
+    colours = to_rgba_array(list(STATE_COLOURS.values()))
+    corners = xy[triangles]  # (m, 3, 2)
+    ax.add_collection(PolyCollection(
+        corners, facecolors=colours[np.clip(state, 0, 2)],
+        edgecolors="face" if fine else "white", linewidths=0.2 if fine else 0.6,
+    ))
+    wrinkled = np.flatnonzero(state == STATE_NAMES.index("wrinkled"))
+    segments, sampled = _tension_lines(x, triangles[wrinkled], cell["tension_direction"][wrinkled],
+                                       axes)
+    if wrinkled.size:
+        ax.add_collection(LineCollection(
+            segments, colors="#202020", linewidths=0.8 if sampled else 1.2, capstyle="round",
+        ))
+    counts = [int(np.count_nonzero(state == k)) for k in range(3)]
+    ax.legend(
+        handles=[
+            Patch(facecolor=colour, edgecolor="0.4", label=f"{name} ({count})")
+            for (name, colour), count in zip(STATE_COLOURS.items(), counts)
+        ] + ([Line2D([], [], color="#202020", lw=1.2,
+                     label="tension lines" + (",\nsampled" if sampled else ""))]
+             if wrinkled.size else []),
+        loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, title="elements",
+    )
+    ax.set_title(f"Deformed membrane, {step_title}\n{view}", fontsize=10)
+    written.append(out_dir / "state.png")
+    fig.savefig(written[-1], dpi=150)
+    plt.close(fig)
+
+    # -- major principal stress ---------------------------------------------------------------
+    fig, ax = _map_axes(plt, xy, axes, length_unit)
+    major = cell["principal_stress"][:, 1]
+    stress_unit = _unit(units, "stress")
+    top = float(np.percentile(major, 98))
+    clipped = major.max() > 1.5 * top > 0  # a concentration would wash out the rest: clip
+    image = ax.tripcolor(
+        xy[:, 0], xy[:, 1], triangles, facecolors=major, cmap="viridis",
+        vmin=min(0.0, float(major.min())), vmax=top if clipped else float(major.max()),
+        edgecolors="face" if fine else "white", linewidth=0.2 if fine else 0.4,
+    )
+    bar = fig.colorbar(image, ax=ax, shrink=0.9, extend="max" if clipped else "neither")
+    bar.set_label(_with_unit("major principal stress resultant", stress_unit))
+    note = ""
+    if clipped:
+        note = (f"\ncolours clipped at the 98th percentile; "
+                f"maximum {major.max():.3g}{' ' + stress_unit if stress_unit else ''}")
+    ax.set_title(
+        f"Major principal Cauchy stress (force per current length), {step_title}\n"
+        f"deformed membrane {view}{note}", fontsize=10,
+    )
+    written.append(out_dir / "principal_stress.png")
+    fig.savefig(written[-1], dpi=150)
+    plt.close(fig)
+
+    # -- load-displacement --------------------------------------------------------------------
+    header, history = _read_history(out_dir / HISTORY)
+    load = history[:, header.index("load_factor")]
+    probes = [name[:-3] for name in header if name.endswith("_ux")]
+    if probes:
+        fig, (ax_magnitude, ax_parts) = plt.subplots(
+            1, 2, figsize=(11, 4.5), layout="constrained"
+        )
+        cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+        for k, probe in enumerate(probes):
+            colour = cycle[k % len(cycle)]
+            u = np.stack(
+                [history[:, header.index(f"{probe}_u{c}")] for c in AXIS_NAMES], axis=1
+            )
+            ax_magnitude.plot(load, np.linalg.norm(u, axis=1), "o-", color=colour, ms=4,
+                              label=probe)
+            for c, style in zip(range(3), ("-", "--", ":")):
+                ax_parts.plot(load, u[:, c], style, color=colour, marker=".",
+                              label=f"{probe}: u{AXIS_NAMES[c]}")
+        ax_magnitude.set_ylabel(_with_unit("|u|, mean over the probe's nodes", length_unit))
+        ax_magnitude.set_title("Probe displacement magnitude")
+        ax_parts.set_ylabel(_with_unit("u, mean over the probe's nodes", length_unit))
+        ax_parts.set_title("Probe displacement components")
+        ax_parts.axhline(0.0, color="0.6", lw=0.6)
+        for ax in (ax_magnitude, ax_parts):
+            ax.legend(fontsize=8, ncol=2 if len(probes) > 3 else 1)
+        panels = (ax_magnitude, ax_parts)
+    else:
+        fig, ax = plt.subplots(figsize=(6.5, 4.5), layout="constrained")
+        ax.plot([s["load_factor"] for s in summary["steps"]],
+                [s["max_displacement"] for s in summary["steps"]], "o-", ms=4)
+        ax.set_ylabel(_with_unit("largest nodal displacement", length_unit))
+        ax.set_title("Largest displacement")
+        panels = (ax,)
+    for ax in panels:
+        ax.set_xlabel("load factor")
+        ax.set_xlim(0.0, 1.03 * max(1.0, float(load.max(initial=0.0))))
+        ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
+        ax.grid(True, alpha=0.3)
+    if not summary["converged"]:
+        fig.suptitle(_stop_note(summary["message"]), fontsize=9, color="firebrick")
+    written.append(out_dir / "load_displacement.png")
+    fig.savefig(written[-1], dpi=120)
+    plt.close(fig)
+    return written

@@ -111,7 +111,7 @@ def element_report(model, u: np.ndarray) -> ElementReport:
     F = result.deformation_gradient
     C = right_cauchy_green(F)
     q = plane_quantities(C, result.response)
-    frame = model.elements.geometry.frame  # (n, 2, 3)
+    frame = model.geometry.frame  # (n, 2, 3)
     reference_tension = np.einsum("na,nai->ni", q.tension_direction, frame)
     reference_wrinkle = np.einsum("na,nai->ni", q.wrinkle_direction, frame)
     tension = _unit(np.einsum("nia,na->ni", F, q.tension_direction))

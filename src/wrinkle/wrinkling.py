@@ -31,12 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wrinkle.materials.base import (
-    Material,
-    green_lagrange_voigt,
-    tensor_from_voigt_stress,
-    voigt_stress,
-)
+from wrinkle.materials.base import Material
 
 TAUT, WRINKLED, SLACK = 0, 1, 2
 STATE_NAMES = ("taut", "wrinkled", "slack")
@@ -92,35 +87,27 @@ def _minor_direction_angle(T: np.ndarray) -> np.ndarray:
     return 0.5 * np.arctan2(2.0 * T[:, 0, 1], T[:, 0, 0] - T[:, 1, 1]) + 0.5 * np.pi
 
 
-def _direction_vectors(phi: np.ndarray):
-    """m(phi), m'(phi) (n, 3) and W(phi), V(phi) (n, 2, 3) of the module docstring."""
-    c, s = np.cos(phi), np.sin(phi)
-    zero = np.zeros_like(c)
-    m = np.stack([0.5 * c * c, 0.5 * s * s, c * s], axis=-1)
-    dm = np.stack([-c * s, c * s, c * c - s * s], axis=-1)
-    W = np.stack([np.stack([c, zero, s], -1), np.stack([zero, s, c], -1)], axis=1)
-    V = np.stack([np.stack([-s, zero, c], -1), np.stack([zero, c, -s], -1)], axis=1)
-    return m, dm, W, V
-
-
-def _solve2(J: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Solve batched 2x2 systems J y = r, (n, 2, 2), (n, 2) -> (n, 2); singular -> nan."""
-    det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        y0 = (J[:, 1, 1] * r[:, 0] - J[:, 0, 1] * r[:, 1]) / det
-        y1 = (J[:, 0, 0] * r[:, 1] - J[:, 1, 0] * r[:, 0]) / det
-    return np.stack([y0, y1], axis=-1)
-
-
-def _cauchy_green(e: np.ndarray) -> np.ndarray:
-    """C = I + 2E from Voigt Green-Lagrange strain (E11, E22, 2 E12), (n, 3) -> (n, 2, 2)."""
-    return tensor_from_voigt_stress(e * np.array([2.0, 2.0, 1.0])) + np.eye(2)
+def _cauchy_green(e0: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
+    """C = I + 2E from the Voigt Green-Lagrange strain components E11, E22, 2 E12, each (n,),
+    -> (n, 2, 2)."""
+    C = np.empty(e0.shape + (2, 2))
+    C[:, 0, 0] = 2.0 * e0 + 1.0
+    C[:, 1, 1] = 2.0 * e1 + 1.0
+    C[:, 0, 1] = e2
+    C[:, 1, 0] = e2
+    return C
 
 
 def _modified_tensor(C: np.ndarray, phi: np.ndarray, b: np.ndarray) -> np.ndarray:
     """C' = C + b w (x) w, (n, 2, 2)."""
-    w = np.stack([np.cos(phi), np.sin(phi)], axis=-1)
-    return C + b[:, None, None] * w[:, :, None] * w[:, None, :]
+    c, s = np.cos(phi), np.sin(phi)
+    bc, bs = b * c, b * s
+    out = np.empty_like(C)
+    out[:, 0, 0] = C[:, 0, 0] + bc * c
+    out[:, 0, 1] = C[:, 0, 1] + bc * s
+    out[:, 1, 0] = C[:, 1, 0] + bs * c
+    out[:, 1, 1] = C[:, 1, 1] + bs * s
+    return out
 
 
 class Wrinkling:
@@ -133,6 +120,10 @@ class Wrinkling:
     def __init__(self, material: Material, tolerance: float = 1e-13):
         self.material = material
         self.tolerance = tolerance
+        # stress that round-off in E = (C - I)/2 alone produces: a principal stress above
+        # -stress_noise is not a compression (else an undeformed membrane would wrinkle by noise)
+        reference_stiffness = np.linalg.norm(material.response(np.eye(2)[None]).tangent)
+        self.stress_noise = 64.0 * np.finfo(float).eps * reference_stiffness
 
     @property
     def thickness(self) -> float:
@@ -143,13 +134,14 @@ class Wrinkling:
         return self.response(C, tangent=False).energy
 
     def classify(self, C: np.ndarray, plain_stress: np.ndarray) -> np.ndarray:
-        """Element states by the paper's criterion (METHOD.md section 5), (n,) int8."""
+        """Element states by the paper's criterion (METHOD.md section 5), (n,) int8; stresses
+        and strains at the level of round-off count as zero."""
         state = np.full(C.shape[0], TAUT, dtype=np.int8)
         minor_stress, _ = _symmetric_eigenvalues(plain_stress)
         _, major_stretch = _symmetric_eigenvalues(C)
-        compressed = minor_stress < 0.0
+        compressed = minor_stress < -self.stress_noise
         state[compressed] = WRINKLED
-        state[compressed & (major_stretch <= 1.0)] = SLACK
+        state[compressed & (major_stretch <= 1.0 + 64.0 * np.finfo(float).eps)] = SLACK
         return state
 
     def response(self, C: np.ndarray, tangent: bool = True) -> WrinklingResponse:
@@ -159,25 +151,34 @@ class Wrinkling:
         stress = plain.stress.copy()
         stiffness = plain.tangent.copy() if tangent else None
         thickness = plain.thickness.copy()
-        energy = self.material.energy(C)
         phi = np.zeros(n)
         b = np.zeros(n)
+
+        # the plain energy is needed only where the element is taut
+        energy = np.zeros(n)
+        taut = state == TAUT
+        energy[taut] = self.material.energy(C[taut])
 
         slack = state == SLACK
         stress[slack] = 0.0
         if tangent:
             stiffness[slack] = 0.0
         thickness[slack] = self.material.thickness
-        energy[slack] = 0.0
 
         wrinkled = np.flatnonzero(state == WRINKLED)
         if wrinkled.size:
             Cw = C[wrinkled]
-            phi_w, b_w = self._solve_conditions(Cw, plain.stress[wrinkled])
-            modified = self.material.response(_modified_tensor(Cw, phi_w, b_w), tangent=True)
+            try:
+                phi_w, b_w = self._solve_conditions(
+                    Cw, plain.stress[wrinkled], plain.tangent[wrinkled] if tangent else None
+                )
+            except WrinklingError as error:  # rows of the wrinkled subset -> rows of C
+                raise WrinklingError(wrinkled[error.elements]) from None
+            C_modified = _modified_tensor(Cw, phi_w, b_w)
+            modified = self.material.response(C_modified, tangent=tangent)
             stress[wrinkled] = modified.stress
             thickness[wrinkled] = modified.thickness
-            energy[wrinkled] = self.material.energy(_modified_tensor(Cw, phi_w, b_w))
+            energy[wrinkled] = self.material.energy(C_modified)
             phi[wrinkled] = phi_w
             b[wrinkled] = b_w
             if tangent:
@@ -187,123 +188,238 @@ class Wrinkling:
         return WrinklingResponse(state, stress, stiffness, thickness, phi, b, energy)
 
     # -- wrinkled state --------------------------------------------------------------------
-    def _residual_and_jacobian(self, e: np.ndarray, phi: np.ndarray, b: np.ndarray):
-        """g = N(C') w (n, 2), J = dg/d(phi, b) (n, 2, 2), and the modified response."""
-        m, dm, W, V = _direction_vectors(phi)
-        e_mod = e + b[:, None] * m
-        modified = self.material.response(_cauchy_green(e_mod), tangent=True)
-        s = voigt_stress(modified.stress)
-        D = modified.tangent
-        g = np.einsum("nij,nj->ni", W, s)
-        WD = np.matmul(W, D)
-        J = np.stack(
-            [
-                np.einsum("nij,nj->ni", WD, b[:, None] * dm) + np.einsum("nij,nj->ni", V, s),
-                np.einsum("nij,nj->ni", WD, m),
-            ],
-            axis=-1,
-        )
-        return g, J, s
+    # Vectors and 2x2 / 3x3 matrices are handled as their (m,) component arrays: for batches
+    # of tiny matrices, explicit multiply-adds are several times faster than einsum/matmul.
+    def _residual_and_jacobian(self, e: tuple, phi: np.ndarray, b: np.ndarray):
+        """g = N(C') w and J = dg/d(phi, b) of the module docstring, as components.
+
+        e: Voigt strain components (E11, E22, 2 E12), each (m,); phi, b: (m,).
+        Returns (g0, g1), (J00, J01, J10, J11) and the Voigt stress (s0, s1, s2) of C',
+        all (m,).
+        """
+        c, s = np.cos(phi), np.sin(phi)  # w = (c, s); the stress is (s0, s1, s2) below
+        cc, ss, cs = c * c, s * s, c * s
+        m0, m1 = 0.5 * cc, 0.5 * ss  # m = (w1^2/2, w2^2/2, w1 w2), m2 = cs
+        C = _cauchy_green(e[0] + b * m0, e[1] + b * m1, e[2] + b * cs)
+        modified = self.material.response(C, tangent=True)
+        N, D = modified.stress, modified.tangent
+        s0, s1, s2 = N[:, 0, 0], N[:, 1, 1], N[:, 0, 1]
+        g0 = c * s0 + s * s2  # W s
+        g1 = s * s1 + c * s2
+        # rows of W D: W = [[c, 0, s], [0, s, c]]
+        D20, D21, D22 = D[:, 2, 0], D[:, 2, 1], D[:, 2, 2]
+        a0 = c * D[:, 0, 0] + s * D20
+        a1 = c * D[:, 0, 1] + s * D21
+        a2 = c * D[:, 0, 2] + s * D22
+        d0 = s * D[:, 1, 0] + c * D20
+        d1 = s * D[:, 1, 1] + c * D21
+        d2 = s * D[:, 1, 2] + c * D22
+        # b m' = b (-cs, cs, cc - ss); V s = (c s2 - s s0, c s1 - s s2)
+        bcs = b * cs
+        bdm2 = b * (cc - ss)
+        J00 = bcs * (a1 - a0) + a2 * bdm2 + (c * s2 - s * s0)
+        J10 = bcs * (d1 - d0) + d2 * bdm2 + (c * s1 - s * s2)
+        J01 = a0 * m0 + a1 * m1 + a2 * cs
+        J11 = d0 * m0 + d1 * m1 + d2 * cs
+        return (g0, g1), (J00, J01, J10, J11), (s0, s1, s2)
 
     def _newton(self, e, phi, b, g_tolerance, active):
         """Newton iterations on the wrinkling conditions for rows ``active`` (in place);
-        converged where |g| <= g_tolerance (m,) or the step is at round-off."""
+        converged where |g| <= g_tolerance (m,) or the step is at round-off.
+
+        The iterations run on compact copies of the rows still active; a row's phi and b are
+        written back when it leaves (converged, singular Jacobian or out of iterations).
+        """
         converged = np.zeros(phi.shape[0], dtype=bool)
         idx = np.flatnonzero(active)
+        if idx.size == phi.shape[0]:
+            e_a, phi_a, b_a, tol_a = e, phi.copy(), b.copy(), g_tolerance
+        else:
+            e_a = tuple(component[idx] for component in e)
+            phi_a, b_a, tol_a = phi[idx], b[idx], g_tolerance[idx]
         for _ in range(_NEWTON_ITERATIONS):
             if idx.size == 0:
                 break
-            g, J, _ = self._residual_and_jacobian(e[idx], phi[idx], b[idx])
-            step = _solve2(J, -g)
-            ok = np.all(np.isfinite(step), axis=1)
-            phi[idx[ok]] += step[ok, 0]
-            b[idx[ok]] += step[ok, 1]
-            small = (np.abs(step[:, 0]) <= 1e-14) & (
-                np.abs(step[:, 1]) <= 1e-14 * (1.0 + np.abs(b[idx]))
-            )
-            small |= np.linalg.norm(g, axis=1) <= g_tolerance[idx]
+            (g0, g1), (J00, J01, J10, J11), _ = self._residual_and_jacobian(e_a, phi_a, b_a)
+            # J step = -g by Cramer's rule; a singular J gives a non-finite step
+            with np.errstate(divide="ignore", invalid="ignore"):
+                det = J00 * J11 - J01 * J10
+                step_phi = (J01 * g1 - J11 * g0) / det
+                step_b = (J10 * g0 - J00 * g1) / det
+            ok = np.isfinite(step_phi) & np.isfinite(step_b)
+            if ok.all():
+                phi_a += step_phi
+                b_a += step_b
+            else:
+                phi_a = np.where(ok, phi_a + step_phi, phi_a)
+                b_a = np.where(ok, b_a + step_b, b_a)
+            small = (np.abs(step_phi) <= 1e-14) & (np.abs(step_b) <= 1e-14 * (1.0 + np.abs(b_a)))
+            small |= np.sqrt(g0 * g0 + g1 * g1) <= tol_a
             done = ok & small
-            converged[idx[done]] = True
-            idx = idx[ok & ~done]
+            keep = ok & ~done
+            if not keep.all():
+                leaving = ~keep
+                phi[idx[leaving]] = phi_a[leaving]
+                b[idx[leaving]] = b_a[leaving]
+                converged[idx[done]] = True
+                idx = idx[keep]
+                e_a = tuple(component[keep] for component in e_a)
+                phi_a, b_a, tol_a = phi_a[keep], b_a[keep], tol_a[keep]
+        phi[idx] = phi_a
+        b[idx] = b_a
         return converged
 
-    def _solve_conditions(self, C: np.ndarray, plain_stress: np.ndarray):
-        """Angle phi and parameter b of the wrinkled elements, (m,), (m,)."""
-        e = green_lagrange_voigt(C)
+    def _solve_conditions(
+        self, C: np.ndarray, plain_stress: np.ndarray, plain_tangent: np.ndarray | None = None
+    ):
+        """Angle phi and parameter b of the wrinkled elements, (m,), (m,).
+
+        plain_stress (m, 2, 2) and plain_tangent (m, 3, 3) are the plain law at C; the tangent
+        is evaluated here if not given.
+        """
+        e = (0.5 * (C[:, 0, 0] - 1.0), 0.5 * (C[:, 1, 1] - 1.0), C[:, 0, 1])
+        if plain_tangent is None:
+            plain_tangent = self.material.response(C, tangent=True).tangent
         # |g| can be no smaller than round-off in E = (C - I)/2 times the stiffness
-        stiffness = np.linalg.norm(self.material.response(C, tangent=True).tangent.reshape(-1, 9), axis=1)
+        stiffness = np.linalg.norm(plain_tangent.reshape(-1, 9), axis=1)
         g_tolerance = np.maximum(
             self.tolerance * np.linalg.norm(plain_stress.reshape(-1, 4), axis=1),
             64.0 * np.finfo(float).eps * stiffness,
         )
         # first guess: the direction of the most compressive plain stress (exact for isotropy),
-        # and b from the normal condition w.N'.w = 0 linearised at b = 0
+        # and b from the normal condition w.N'.w = 0 linearised at b = 0. Where both plain
+        # principal stresses are compressive, only the stretched direction of C can carry the
+        # tension: start from the minor principal direction of C instead (from the stress
+        # direction, Newton often ends on a compressive, inadmissible root there).
         phi = _minor_direction_angle(plain_stress)
-        b = self._linearised_b(e, phi)
+        S00, S11, S01 = plain_stress[:, 0, 0], plain_stress[:, 1, 1], plain_stress[:, 0, 1]
+        biaxial = np.flatnonzero((S00 + S11 < 0.0) & (S00 * S11 - S01 * S01 > 0.0))
+        phi[biaxial] = _minor_direction_angle(C[biaxial])
+        b = _linearised_b(phi, plain_stress, plain_tangent)
         converged = self._newton(e, phi, b, g_tolerance, np.ones(phi.shape, dtype=bool))
         valid = converged & self._admissible(e, phi, b, g_tolerance)
         if not np.all(valid):
             # safeguard: global search over the angle for the least relaxed energy, then Newton
-            retry = ~valid
-            phi[retry], b[retry] = self._angle_search(e[retry])
-            converged = self._newton(e, phi, b, g_tolerance, retry)
-            valid[retry] = (converged & self._admissible(e, phi, b, g_tolerance))[retry]
+            retry = np.flatnonzero(~valid)
+            e_retry = tuple(component[retry] for component in e)
+            phi[retry], b[retry] = self._angle_search(
+                e_retry, plain_stress[retry], plain_tangent[retry]
+            )
+            converged = self._newton(e, phi, b, g_tolerance, ~valid)
+            valid[retry] = converged[retry] & self._admissible(
+                e_retry, phi[retry], b[retry], g_tolerance[retry]
+            )
             if not np.all(valid):
                 raise WrinklingError(np.flatnonzero(~valid))
         phi = np.mod(phi, np.pi)
         return phi, np.maximum(b, 0.0)
 
-    def _linearised_b(self, e: np.ndarray, phi: np.ndarray) -> np.ndarray:
-        """b solving w.N(e + b m).w = 0 to first order in b, clipped at 0, (m,)."""
-        m, _, _, _ = _direction_vectors(phi)
-        plain = self.material.response(_cauchy_green(e), tangent=True)
-        s = voigt_stress(plain.stress)
-        Dm = np.einsum("nij,nj->ni", plain.tangent, m)
-        return np.maximum(-np.sum(m * s, axis=1) / np.sum(m * Dm, axis=1), 0.0)
-
     def _admissible(self, e, phi, b, g_tolerance) -> np.ndarray:
         """b >= 0 and non-negative uniaxial tension at a solution, (m,) bool."""
-        g, _, s = self._residual_and_jacobian(e, phi, b)
-        tension = s[:, 0] + s[:, 1]  # trace of the (rank-one) stress
+        (g0, g1), _, (s0, s1, _) = self._residual_and_jacobian(e, phi, b)
+        tension = s0 + s1  # trace of the (rank-one) stress
         return (
             (b >= -1e-12)
             & (tension >= -g_tolerance)
-            & (np.linalg.norm(g, axis=1) <= 10.0 * g_tolerance)
+            & (np.sqrt(g0 * g0 + g1 * g1) <= 10.0 * g_tolerance)
         )
 
-    def _angle_search(self, e: np.ndarray):
-        """Least relaxed energy over a grid of angles (b by 1-D Newton per angle), (m,), (m,)."""
-        n = e.shape[0]
+    def _angle_search(self, e: tuple, plain_stress: np.ndarray, plain_tangent: np.ndarray):
+        """Least relaxed energy over a grid of angles (b by 1-D Newton per angle), (m,), (m,).
+
+        e: strain components, each (m,); plain_stress (m, 2, 2), plain_tangent (m, 3, 3): the
+        plain law at e.
+        """
+        n = e[0].shape[0]
         angles = np.linspace(0.0, np.pi, _GRID_ANGLES, endpoint=False)
-        phi = np.repeat(angles[None, :], n, axis=0).ravel()
-        ee = np.repeat(e, _GRID_ANGLES, axis=0)
-        b = self._linearised_b(ee, phi)
-        m, _, _, _ = _direction_vectors(phi)
+        phi = np.tile(angles, n)
+        e0, e1, e2 = (np.repeat(component, _GRID_ANGLES) for component in e)
+        b = _linearised_b(
+            phi,
+            np.repeat(plain_stress, _GRID_ANGLES, axis=0),
+            np.repeat(plain_tangent, _GRID_ANGLES, axis=0),
+        )
+        c, s = np.cos(phi), np.sin(phi)
+        m0, m1, m2 = 0.5 * c * c, 0.5 * s * s, c * s
+        # 1-D Newton on the slope w.N'.w of the energy along b, clipped at b = 0; rows stop
+        # once their update is at round-off
+        idx = np.arange(b.size)
         for _ in range(30):
-            r = self.material.response(_cauchy_green(ee + b[:, None] * m), tangent=True)
-            s = voigt_stress(r.stress)
-            slope = np.sum(m * s, axis=1)
-            curvature = np.sum(m * np.einsum("nij,nj->ni", r.tangent, m), axis=1)
-            b = np.maximum(b - slope / curvature, 0.0)
-        energy = self.material.energy(_cauchy_green(ee + b[:, None] * m))
+            bi = b[idx]
+            mi0, mi1, mi2 = m0[idx], m1[idx], m2[idx]
+            r = self.material.response(
+                _cauchy_green(e0[idx] + bi * mi0, e1[idx] + bi * mi1, e2[idx] + bi * mi2),
+                tangent=True,
+            )
+            slope, curvature = _directional_derivatives(mi0, mi1, mi2, r.stress, r.tangent)
+            b_new = np.maximum(bi - slope / curvature, 0.0)
+            b[idx] = b_new
+            moving = ~(np.abs(b_new - bi) <= 4.0 * np.finfo(float).eps * (1.0 + np.abs(bi)))
+            idx = idx[moving]
+            if idx.size == 0:
+                break
+        energy = self.material.energy(_cauchy_green(e0 + b * m0, e1 + b * m1, e2 + b * m2))
         energy = energy.reshape(n, _GRID_ANGLES)
         best = np.argmin(energy, axis=1)
         rows = np.arange(n)
         return angles[best], b.reshape(n, _GRID_ANGLES)[rows, best]
 
     def _wrinkled_tangent(self, phi, b, stress, D) -> np.ndarray:
-        """Consistent dN/dE of wrinkled elements (module docstring), (m, 3, 3)."""
-        m, dm, W, V = _direction_vectors(phi)
-        s = voigt_stress(stress)
-        WD = np.matmul(W, D)
-        M = np.stack([b[:, None] * dm, m], axis=-1)  # (m, 3, 2)
-        DM = np.matmul(D, M)
-        J = np.matmul(W, DM)
-        J[:, :, 0] += np.einsum("nij,nj->ni", V, s)
-        det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
-        J_inv = np.stack(
-            [np.stack([J[:, 1, 1], -J[:, 0, 1]], -1), np.stack([-J[:, 1, 0], J[:, 0, 0]], -1)],
-            axis=1,
-        ) / det[:, None, None]
-        tangent = D - DM @ J_inv @ WD
-        return 0.5 * (tangent + tangent.transpose(0, 2, 1))
+        """Consistent dN/dE of wrinkled elements (module docstring), (m, 3, 3).
+
+        With M = [b m', m] (3 x 2) and J = W D M + [V s, 0]:
+        dN/dE = D - (D M) J^-1 (W D), symmetrised.
+        """
+        c, s = np.cos(phi), np.sin(phi)
+        cc, ss, cs = c * c, s * s, c * s
+        m0, m1 = 0.5 * cc, 0.5 * ss
+        bcs = b * cs
+        bdm2 = b * (cc - ss)
+        s0, s1, s2 = stress[:, 0, 0], stress[:, 1, 1], stress[:, 0, 1]
+        Dij = [[D[:, i, j] for j in range(3)] for i in range(3)]
+        # D M: column 0 = D (b m'), column 1 = D m, rows i = 0, 1, 2
+        DM0 = [bcs * (Dij[i][1] - Dij[i][0]) + Dij[i][2] * bdm2 for i in range(3)]
+        DM1 = [Dij[i][0] * m0 + Dij[i][1] * m1 + Dij[i][2] * cs for i in range(3)]
+        # rows of W D
+        WD0 = [c * Dij[0][j] + s * Dij[2][j] for j in range(3)]
+        WD1 = [s * Dij[1][j] + c * Dij[2][j] for j in range(3)]
+        J00 = c * DM0[0] + s * DM0[2] + (c * s2 - s * s0)
+        J01 = c * DM1[0] + s * DM1[2]
+        J10 = s * DM0[1] + c * DM0[2] + (c * s1 - s * s2)
+        J11 = s * DM1[1] + c * DM1[2]
+        inverse_det = 1.0 / (J00 * J11 - J01 * J10)
+        # P = J^-1 W D, rows 0 and 1
+        P0 = [(J11 * WD0[j] - J01 * WD1[j]) * inverse_det for j in range(3)]
+        P1 = [(J00 * WD1[j] - J10 * WD0[j]) * inverse_det for j in range(3)]
+        tangent = np.empty_like(D)
+        for i in range(3):
+            for j in range(i, 3):
+                value = 0.5 * (
+                    (Dij[i][j] - (DM0[i] * P0[j] + DM1[i] * P1[j]))
+                    + (Dij[j][i] - (DM0[j] * P0[i] + DM1[j] * P1[i]))
+                )
+                tangent[:, i, j] = value
+                if j != i:
+                    tangent[:, j, i] = value
+        return tangent
+
+
+def _directional_derivatives(m0, m1, m2, stress, D):
+    """m.s and m.D m for Voigt m = (m0, m1, m2), (n,) each, stress (n, 2, 2), D (n, 3, 3)."""
+    slope = m0 * stress[:, 0, 0] + m1 * stress[:, 1, 1] + m2 * stress[:, 0, 1]
+    curvature = (
+        m0 * (D[:, 0, 0] * m0 + D[:, 0, 1] * m1 + D[:, 0, 2] * m2)
+        + m1 * (D[:, 1, 0] * m0 + D[:, 1, 1] * m1 + D[:, 1, 2] * m2)
+        + m2 * (D[:, 2, 0] * m0 + D[:, 2, 1] * m1 + D[:, 2, 2] * m2)
+    )
+    return slope, curvature
+
+
+def _linearised_b(phi: np.ndarray, stress: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """b solving w.N(e + b m).w = 0 to first order in b, clipped at 0, (m,).
+
+    stress (m, 2, 2) and D (m, 3, 3): the plain law at e.
+    """
+    c, s = np.cos(phi), np.sin(phi)
+    slope, curvature = _directional_derivatives(0.5 * c * c, 0.5 * s * s, c * s, stress, D)
+    return np.maximum(-slope / curvature, 0.0)

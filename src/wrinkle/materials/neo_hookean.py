@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wrinkle.materials.base import MembraneResponse, as_cauchy_green_batch, tangent_to_voigt
+from wrinkle.materials.base import MembraneResponse, as_cauchy_green_batch
 
 _MAX_NEWTON = 60
 
@@ -59,9 +59,29 @@ def _inverse_2x2(a: np.ndarray, b: np.ndarray, c: np.ndarray, det: np.ndarray) -
     return inv
 
 
-def _symmetric_product(A: np.ndarray) -> np.ndarray:
-    """II_abcd(A) = (A_ac A_bd + A_ad A_bc)/2 for a batch of symmetric A, (n, 2, 2, 2, 2)."""
-    return 0.5 * (np.einsum("nac,nbd->nabcd", A, A) + np.einsum("nad,nbc->nabcd", A, A))
+def _voigt_tensor_products(
+    p: np.ndarray, q: np.ndarray, r: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Voigt (11, 22, 12) forms of A (x) A and II(A) for symmetric A = [[p, r], [r, q]].
+
+    II_abcd(A) = (A_ac A_bd + A_ad A_bc)/2; T_ij = T[a_i, b_i, a_j, b_j] with the pairs
+    (0, 0), (1, 1), (0, 1) (engineering shear, as ``tangent_to_voigt``). Each (n, 3, 3).
+    """
+    n = p.shape[0]
+    outer = np.empty((n, 3, 3))
+    II = np.empty((n, 3, 3))
+    pp, qq, rr, pq, pr, qr = p * p, q * q, r * r, p * q, p * r, q * r
+    for (i, j), o, s in (
+        ((0, 0), pp, pp),
+        ((1, 1), qq, qq),
+        ((2, 2), rr, 0.5 * (pq + rr)),
+        ((0, 1), pq, rr),
+        ((0, 2), pr, pr),
+        ((1, 2), qr, qr),
+    ):
+        outer[:, i, j] = outer[:, j, i] = o
+        II[:, i, j] = II[:, j, i] = s
+    return outer, II
 
 
 class NeoHookean:
@@ -174,19 +194,20 @@ class NeoHookean:
 
         tangent_matrix = None
         if tangent:
-            outer = np.einsum("nab,ncd->nabcd", C_inv, C_inv)
-            II = _symmetric_product(C_inv)
+            # Voigt (11, 22, 12) entries of C^-1 (x) C^-1 (``outer``) and II(C^-1), with the
+            # components p = C^-1_11, q = C^-1_22, r = C^-1_12 (see ``_voigt_tensor_products``)
+            p, q, r = C_inv[:, 0, 0], C_inv[:, 1, 1], C_inv[:, 0, 1]
+            outer, II = _voigt_tensor_products(p, q, r)
             if self.lmbda is None:
-                CC = (2.0 * mu * C33)[:, None, None, None, None] * (outer + II)
+                scale = D0 * (2.0 * mu * C33)
+                tangent_matrix = scale[:, None, None] * (outer + II)
             else:
                 # 3-D tangent, in-plane block and its 33 couplings (C3^-1_a3 = 0, C3^-1_33 = 1/C33)
                 shear = 2.0 * (mu - lmbda * ln_J)
-                CC_in = lmbda * outer + shear[:, None, None, None, None] * II
-                CC_ab33 = (lmbda / C33)[:, None, None] * C_inv
+                CC_ab33 = lmbda / C33  # times C^-1
                 CC_3333 = (lmbda + shear) / C33**2
-                condensed = np.einsum("nab,ncd->nabcd", CC_ab33, CC_ab33)
-                CC = CC_in - condensed / CC_3333[:, None, None, None, None]
-            tangent_matrix = D0 * tangent_to_voigt(CC)
+                condensed = (CC_ab33 * CC_ab33 / CC_3333)[:, None, None] * outer
+                tangent_matrix = D0 * (lmbda * outer + shear[:, None, None] * II - condensed)
 
         return MembraneResponse(stress=stress, tangent=tangent_matrix, thickness=D0 * np.sqrt(C33))
 

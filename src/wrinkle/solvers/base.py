@@ -27,6 +27,7 @@ class Evaluation:
         identity, CSR; None unless asked for.
     round_off: residual norm that round-off alone can produce (force); a residual below it
         counts as converged whatever the tolerance.
+    symmetric: whether the stiffness is symmetric (no follower loads).
     """
 
     residual: np.ndarray
@@ -35,6 +36,7 @@ class Evaluation:
     states: tuple[int, int, int]
     stiffness: sp.csr_matrix | None = None
     round_off: float = 0.0
+    symmetric: bool = True
 
     @property
     def residual_norm(self) -> float:

@@ -2,9 +2,9 @@
 
 Each iteration solves (K + theta I) du = f - f* (METHOD.md section 7) with a sparse LU and
 accepts the step by the gain ratio of the potential energy Pi(u) = sum_e A0 w_relaxed - f.u
-against its quadratic model, rho = [Pi(u) - Pi(u + du)] / [r.du - du.K.du / 2]. Where the
-decrease is at the level of round-off in Pi (close to convergence), or the loads have no
-potential, the merit is |f - f*|^2 / 2 with its Gauss-Newton model instead. Near the solution
+(- p V for pressure) against its quadratic model, rho = [Pi(u) - Pi(u + du)] / [r.du -
+du.K.du / 2]. Where the decrease is at the level of round-off in Pi (close to convergence), or
+the loads have no potential, the merit is |f - f*|^2 with its Gauss-Newton model instead. Near the solution
 theta falls to a floor of 1e-14 times the mean diagonal stiffness and the iteration is Newton's,
 converging quadratically with the consistent tangent.
 """
@@ -30,26 +30,29 @@ class RegularisedNewton(RegularisedSolver):
         return 1e-8
 
     def trial_step(self, ev: Evaluation, theta: float, free: np.ndarray):
+        """Step and the decrease predicted for the merit in use: the potential energy by its
+        quadratic model, or (no potential, or a decrease at round-off) |r|^2 by its
+        Gauss-Newton model. From a flat membrane under pressure only the energy model sees the
+        benefit of moving out of plane (the tangent has no out-of-plane stiffness there)."""
         lu = factorise(shifted(ev.stiffness, theta * self._scale, free))
         if lu is None:
             return None, 0.0
         step = lu.solve(ev.residual)
         if not np.all(np.isfinite(step)):
             return None, 0.0
+        r = ev.residual
         K_step = ev.stiffness @ step
-        self._model = (ev.residual @ step - 0.5 * step @ K_step, K_step)
-        return step, float(np.dot(ev.residual, ev.residual) - np.sum((ev.residual - K_step) ** 2))
+        energy_model = float(r @ step - 0.5 * step @ K_step)
+        self._use_energy = np.isfinite(ev.energy) and energy_model > _ROUND_OFF * abs(ev.energy)
+        if self._use_energy:
+            return step, energy_model
+        return step, float(r @ r - np.sum((r - K_step) ** 2))
 
     def gain_ratio(self, ev: Evaluation, trial: Evaluation, predicted: float) -> float:
-        """The better of the energy and residual gain ratios: a step that makes good progress
-        on either merit is taken (energy alone stalls at round-off and at state switches)."""
-        energy_model, _ = self._model
-        residual_ratio = (ev.residual_norm**2 - trial.residual_norm**2) / predicted
-        actual = ev.energy - trial.energy
-        noise = _ROUND_OFF * max(abs(ev.energy), abs(trial.energy))
-        if np.isfinite(actual) and energy_model > noise:
-            return max(actual / energy_model, residual_ratio)
-        return residual_ratio
+        if self._use_energy:
+            actual = ev.energy - trial.energy
+            return actual / predicted if np.isfinite(actual) else -np.inf
+        return (ev.residual_norm**2 - trial.residual_norm**2) / predicted
 
     def increase(self, theta: float) -> float:
         return max(10.0 * theta, 1e-10)

@@ -3,7 +3,8 @@
 Each iteration minimises the linearised residual |f - f* - K du|^2 with a penalty on |du|:
 (2 K^T K + theta I) du = 2 K^T (f - f*). For symmetric K this is
 du = Re[(K - i mu I)^-1 (f - f*)] with mu^2 = theta / 2 (METHOD.md section 7), so one complex
-LU of a matrix with K's own sparsity replaces the much denser K^T K. theta follows Fletcher's
+LU of a matrix with K's own sparsity replaces the much denser K^T K (with follower loads K is
+not symmetric and K^T K is formed). theta follows Fletcher's
 rules (Practical Methods of Optimization, vol. 1, 1980, section 5.2): the gain ratio
 rho = (|r|^2 - |r_new|^2) / (|r|^2 - |r - K du|^2); theta * 4 if rho < 0.25, theta / 2 if
 rho > 0.75, and theta set to its floor once it falls below a critical value so that the
@@ -31,15 +32,24 @@ class RestrictedStep(RegularisedSolver):
         return 2.0 * (1e-3 * self._scale) ** 2
 
     def trial_step(self, ev: Evaluation, theta: float, free: np.ndarray):
-        mu = np.sqrt(theta / 2.0)
-        lu = factorise(shifted(ev.stiffness.astype(complex), -1j * mu, free))
-        if lu is None:
+        r = ev.residual
+        K = ev.stiffness
+        if ev.symmetric:
+            mu = np.sqrt(theta / 2.0)
+            lu = factorise(shifted(K.astype(complex), -1j * mu, free))
+            solve = (lambda rhs: lu.solve(rhs.astype(complex)).real) if lu else None
+            rhs = r
+        else:  # follower loads: form 2 K^T K (denser) as the paper does
+            normal = (K.T @ K).tocsr()
+            lu = factorise(shifted(normal, theta / 2.0, free))
+            solve = lu.solve if lu else None
+            rhs = K.T @ r
+        if solve is None:
             return None, 0.0
-        step = lu.solve(ev.residual.astype(complex)).real
+        step = solve(rhs)
         if not np.all(np.isfinite(step)):
             return None, 0.0
-        r = ev.residual
-        predicted = float(r @ r - np.sum((r - ev.stiffness @ step) ** 2))
+        predicted = float(r @ r - np.sum((r - K @ step) ** 2))
         return step, predicted
 
     def gain_ratio(self, ev: Evaluation, trial: Evaluation, predicted: float) -> float:

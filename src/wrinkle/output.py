@@ -1,0 +1,281 @@
+"""Writing results as the analysis runs: ParaView files, a JSON summary and a CSV history.
+
+``ResultWriter(out_dir, model)`` writes into ``out_dir``, each time a load step converges
+(``write_step``):
+
+- ``step_0001.vtu``, ``step_0002.vtu``, ...: the mesh in the reference configuration with
+  point data ``displacement`` (n_nodes, 3) and ``reaction`` (n_nodes, 3; zero except at
+  supports), and cell data ``state`` (0 taut, 1 wrinkled, 2 slack), ``tension_direction`` and
+  ``wrinkle_direction`` (unit 3-vectors in the deformed configuration, zero where not defined),
+  ``principal_stress`` (minor, major Cauchy stress resultant, force per unit current length),
+  ``wrinkling_strain`` (beta) and ``thickness`` (current). In ParaView, open ``results.pvd``
+  and apply the "Warp By Vector" filter with the vectors ``displacement`` (scale factor 1)
+  to see the deformed membrane; colour by ``state`` and add "Glyph" on ``tension_direction``
+  for the tension field.
+- ``results.pvd``: a ParaView collection of the converged steps, timestep = load factor.
+- ``summary.json``: {"converged", "message", "steps": [{"step", "file", "load_factor",
+  "iterations", "residual", "states": {"taut", "wrinkled", "slack"}, "reactions":
+  {support label: [Fx, Fy, Fz]}, "max_displacement"}], "wall_time" (seconds since the writer
+  was made), "units" and "case" if given}.
+- ``history.csv``: one row per step: step, load_factor, iterations, residual, taut, wrinkled,
+  slack, ``<support>_Fx/_Fy/_Fz`` per support, ``<probe>_ux/_uy/_uz`` per probe (mean
+  displacement of the probe's nodes).
+
+Every file is written to a temporary file in ``out_dir`` and moved into place with
+``os.replace``, so a crash or Ctrl-C leaves every finished step readable, and ``summary.json``
+says where the analysis stopped ("converged": false, "message": "running") until ``finish``.
+
+Units are consistent units; ``units`` (e.g. {"length": "m", "force": "N"}) is recorded in the
+summary for the pictures (``wrinkle.plot.plot_results``) and the reader.
+meshio is an optional dependency: pip install "wrinkle[io]".
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import re
+import secrets
+import time
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from wrinkle.results import element_report
+
+SUMMARY = "summary.json"
+HISTORY = "history.csv"
+COLLECTION = "results.pvd"
+STEP_FILE = re.compile(r"step_\d{4,}\.vtu")
+STATE_NAMES = ("taut", "wrinkled", "slack")
+
+
+def _meshio():
+    try:
+        import meshio
+    except ImportError:  # pragma: no cover - depends on the installation
+        raise ImportError(
+            'wrinkle: writing results needs meshio; install it with pip install "wrinkle[io]"'
+        ) from None
+    return meshio
+
+
+def step_file_name(index: int) -> str:
+    """File name of the ``index``-th converged step (1-based): step_0001.vtu, ..."""
+    return f"step_{index:04d}.vtu"
+
+
+def atomic_write(path: Path, write: Callable[[Path], None]) -> None:
+    """Call ``write(temporary_path)`` on a temporary file next to ``path``, flush it to disk
+    and move it onto ``path`` with os.replace: readers see the old file or the whole new one.
+    The temporary file is removed if ``write`` fails or is interrupted."""
+    path = Path(path)
+    while True:  # mode "x": a new file with the usual permissions (not mkstemp's 0600)
+        temporary = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
+        try:
+            open(temporary, "x").close()
+            break
+        except FileExistsError:  # pragma: no cover - 32 random bits collided
+            continue
+    try:
+        write(temporary)
+        with open(temporary, "rb+") as handle:
+            os.fsync(handle.fileno())
+        os.replace(temporary, path)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+
+
+def _write_text(path: Path, text: str) -> None:
+    atomic_write(path, lambda temporary: temporary.write_text(text, encoding="utf-8"))
+
+
+class ResultWriter:
+    """Writes each converged load step of ``model`` into ``out_dir`` (see the module docstring).
+
+    probes: {name: node indices (k,)} whose mean displacement goes into history.csv;
+    units: e.g. {"length": "m", "force": "N"}, recorded in summary.json; case: the case file
+    the model came from, recorded in summary.json. Supports are ``model.supports`` (objects
+    with ``label`` and ``nodes``), read when the writer is made; supports with the same label
+    are reported as one (the reaction summed over the union of their nodes). Creates
+    ``out_dir``; removes step_NNNN.vtu files of an earlier run there. Raises ValueError for a
+    probe with no nodes or with nodes outside the mesh.
+    """
+
+    def __init__(
+        self,
+        out_dir: str | os.PathLike,
+        model,
+        probes: Mapping[str, np.ndarray] | None = None,
+        units: Mapping[str, str] | None = None,
+        case: str | os.PathLike | None = None,
+    ):
+        self._start = time.perf_counter()
+        self.out_dir = Path(out_dir)
+        self.model = model
+        n_nodes = model.mesh.n_nodes
+        self.probes: dict[str, np.ndarray] = {}
+        for name, nodes in (probes or {}).items():
+            nodes = np.atleast_1d(np.asarray(nodes))
+            if nodes.dtype == bool:
+                nodes = np.flatnonzero(nodes)
+            if nodes.size == 0 or not np.issubdtype(nodes.dtype, np.integer):
+                raise ValueError(f"probe {name!r}: give a non-empty array of node indices")
+            if np.any((nodes < 0) | (nodes >= n_nodes)):
+                raise ValueError(f"probe {name!r}: node indices must lie in 0..{n_nodes - 1}")
+            self.probes[str(name)] = nodes.astype(np.int64)
+        self.supports: dict[str, np.ndarray] = {}  # label -> nodes; a repeated label merges
+        for support in getattr(model, "supports", []):
+            label = str(support.label)
+            nodes = np.asarray(support.nodes, dtype=np.int64).ravel()
+            self.supports[label] = np.union1d(self.supports.get(label, nodes), nodes)
+        self.units = dict(units) if units else None
+        self.case = str(case) if case is not None else None
+        self.steps: list[dict] = []
+        self.rows: list[list] = []
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        for old in self.out_dir.iterdir():
+            if STEP_FILE.fullmatch(old.name):
+                old.unlink()
+        self._write_collection()
+        self._write_history()
+        self._write_summary(False, "running")
+
+    # -- per step -----------------------------------------------------------------------
+    def write_step(self, step) -> Path:
+        """Write one converged ``StepResult``: its .vtu, then the collection, the history and
+        the summary ("running"). Returns the path of the .vtu."""
+        index = len(self.steps) + 1
+        name = step_file_name(index)
+        path = self.out_dir / name
+        self._write_vtu(path, step)
+        u = np.asarray(step.displacement, dtype=float).reshape(-1, 3)
+        reactions = np.asarray(step.reactions, dtype=float).reshape(-1, 3)
+        support_forces = {
+            label: reactions[nodes].sum(axis=0) for label, nodes in self.supports.items()
+        }
+        probe_means = {name: u[nodes].mean(axis=0) for name, nodes in self.probes.items()}
+        states = [int(s) for s in step.states]
+        self.steps.append({
+            "step": index,
+            "file": name,
+            "load_factor": float(step.load_factor),
+            "iterations": int(step.iterations),
+            "residual": float(step.residual),
+            "states": dict(zip(STATE_NAMES, states)),
+            "reactions": {label: force.tolist() for label, force in support_forces.items()},
+            "max_displacement": float(np.linalg.norm(u, axis=1).max(initial=0.0)),
+        })
+        row = [index, float(step.load_factor), int(step.iterations), float(step.residual)]
+        row += states
+        for force in support_forces.values():
+            row += force.tolist()
+        for mean in probe_means.values():
+            row += mean.tolist()
+        self.rows.append(row)
+        self._write_collection()
+        self._write_history()
+        self._write_summary(False, "running")
+        return path
+
+    def finish(self, converged: bool, message: str) -> Path:
+        """Write the final summary.json (wall time since the writer was made); returns it."""
+        return self._write_summary(bool(converged), str(message))
+
+    # -- files --------------------------------------------------------------------------
+    def _write_vtu(self, path: Path, step) -> None:
+        meshio = _meshio()
+        mesh = self.model.mesh
+        report = element_report(self.model, np.asarray(step.displacement, dtype=float))
+        cell_data = {
+            "state": report.state.astype(np.int32),
+            "tension_direction": report.tension_direction,
+            "wrinkle_direction": report.wrinkle_direction,
+            "principal_stress": report.principal_stress,
+            "wrinkling_strain": report.wrinkling_strain,
+            "thickness": report.thickness,
+        }
+        vtu = meshio.Mesh(
+            mesh.nodes,
+            [("triangle", mesh.triangles)],
+            point_data={
+                "displacement": np.asarray(step.displacement, dtype=float).reshape(-1, 3),
+                "reaction": np.asarray(step.reactions, dtype=float).reshape(-1, 3),
+            },
+            cell_data={key: [np.ascontiguousarray(value)] for key, value in cell_data.items()},
+        )
+        atomic_write(path, lambda temporary: meshio.write(temporary, vtu, file_format="vtu"))
+
+    def _write_collection(self) -> None:
+        lines = [
+            '<?xml version="1.0"?>',
+            '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
+            "  <Collection>",
+        ]
+        for s in self.steps:
+            lines.append(
+                f'    <DataSet timestep="{s["load_factor"]!r}" group="" part="0" '
+                f'file={quoteattr(s["file"])}/>'
+            )
+        lines += ["  </Collection>", "</VTKFile>", ""]
+        _write_text(self.out_dir / COLLECTION, "\n".join(lines))
+
+    def history_header(self) -> list[str]:
+        """Column names of history.csv."""
+        header = ["step", "load_factor", "iterations", "residual", *STATE_NAMES]
+        for label in self.supports:
+            header += [f"{label}_Fx", f"{label}_Fy", f"{label}_Fz"]
+        for name in self.probes:
+            header += [f"{name}_ux", f"{name}_uy", f"{name}_uz"]
+        return header
+
+    def _write_history(self) -> None:
+        buffer = io.StringIO()
+        writer = csv.writer(buffer, lineterminator="\n")
+        writer.writerow(self.history_header())
+        writer.writerows(self.rows)
+        _write_text(self.out_dir / HISTORY, buffer.getvalue())
+
+    def _write_summary(self, converged: bool, message: str) -> Path:
+        summary = {
+            "converged": converged,
+            "message": message,
+            "steps": self.steps,
+            "wall_time": time.perf_counter() - self._start,
+        }
+        if self.units is not None:
+            summary["units"] = self.units
+        if self.case is not None:
+            summary["case"] = self.case
+        path = self.out_dir / SUMMARY
+        _write_text(path, json.dumps(summary, indent=2) + "\n")
+        return path
+
+
+def save_results(
+    results,
+    out_dir: str | os.PathLike,
+    probes: Mapping[str, np.ndarray] | None = None,
+    units: Mapping[str, str] | None = None,
+    case: str | os.PathLike | None = None,
+) -> Path:
+    """Write every step of a finished ``Results`` into ``out_dir`` (files as ``ResultWriter``).
+
+    The summary says converged if the last step reached load factor 1, otherwise where it
+    stopped (e.g. the partial ``results`` of a ConvergenceError); its wall time is the writing
+    time. Returns ``out_dir`` as a Path.
+    """
+    writer = ResultWriter(out_dir, results.model, probes=probes, units=units, case=case)
+    for step in results.steps:
+        writer.write_step(step)
+    if results.steps and abs(results.steps[-1].load_factor - 1.0) <= 1e-12:
+        writer.finish(True, "converged to load factor 1")
+    else:
+        reached = results.steps[-1].load_factor if results.steps else 0.0
+        writer.finish(False, f"stopped at load factor {reached:.6g}")
+    return writer.out_dir
