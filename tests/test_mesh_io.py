@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -320,3 +321,9 @@ def test_element_sets_stored_as_int64():
 def test_sets_are_checked(node_sets, element_sets, message):
     with pytest.raises(ValueError, match=message):
         Mesh(NODES, [[0, 1, 2], [0, 2, 3]], node_sets, element_sets)
+
+
+def test_without_meshio_the_message_says_what_to_install(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "meshio", None)  # import meshio fails
+    with pytest.raises(ImportError, match=r'pip install "wrinkle\[io\]"'):
+        read_mesh(tmp_path / "plate.msh")

@@ -118,9 +118,9 @@ def test_tolerance_relative_to_mesh_size():
         ("and x == 0", r"unexpected 'and' at column 1"),
         ("", r'selector "": empty'),
         ("   ", r'selector "   ": empty'),
-        ("foo == 1", r"unknown name 'foo' at column 1 \(allowed names: x, y, z, r, theta, pi, "
+        ("foo == 1", (r"unknown name 'foo' at column 1 \(allowed names: x, y, z, r, theta, pi, "
                      r"sqrt, abs, sin, cos, tan, atan2, hypot; node sets: bottom, top, left, "
-                     r"right\)"),
+                     r"right\)")),
         ("topp", r"unknown name 'topp' at column 1 .*node sets: bottom, top"),
         ("__import__(x) == 0", r"unknown name '__import__' at column 1"),
         ("__import__('os')", r"unexpected \"'\" at column 12"),
@@ -136,8 +136,8 @@ def test_tolerance_relative_to_mesh_size():
         ("x == 5", r'^selector "x == 5" matches no node \(x spans 0 \.\. 2\)$'),
         ("y > 1 and x < 0", r"matches no node \(y spans 0 \.\. 1, x spans 0 \.\. 2\)$"),
         ("1 == 2", r'^selector "1 == 2" matches no node$'),
-        ("sqrt(x - 1) >= 0", r"a comparison meets NaN \(not a number\) at node 0 "
-                             r"\(x = 0, y = 0, z = 0\)"),
+        ("sqrt(x - 1) >= 0", (r"a comparison meets NaN \(not a number\) at node 0 "
+                             r"\(x = 0, y = 0, z = 0\)")),
     ],
 )
 def test_selector_errors(selector, message):
@@ -193,8 +193,8 @@ def test_evaluate_expression_values():
     "text, message",
     [
         ("0.1 * ", r'expression "0.1 \* ": unexpected end at column 7'),
-        ("y + q", r"unknown name 'q' at column 5 \(allowed names: x, y, z, r, theta, pi, sqrt, "
-                  r"abs, sin, cos, tan, atan2, hypot\)$"),
+        ("y + q", (r"unknown name 'q' at column 5 \(allowed names: x, y, z, r, theta, pi, sqrt, "
+                  r"abs, sin, cos, tan, atan2, hypot\)$")),
         ("1 / x", r'expression "1 / x" is inf at \(x = 0, y = 0, z = 0\)'),
         ("sqrt(x - 2)", r"is nan at \(x = 0, y = 0, z = 0\)"),
         (float("nan"), r"expression nan is not finite"),
@@ -213,9 +213,9 @@ def test_evaluate_expression_rejects_bad_input():
         evaluate_expression("x", np.zeros(3))
 
 
-def test_vectorised_on_a_large_mesh():
-    """One NumPy pass over all nodes: 10^6 nodes selected well within a second."""
-    mesh = rectangle(1.0, 1.0, 999, 999)
+def test_many_nodes():
+    """Vectorised over the nodes: 9 x 10^4 nodes at once."""
+    mesh = rectangle(1.0, 1.0, 299, 299)
     selected = select_nodes(mesh, "x == 0 or (y >= 0.5 and hypot(x, y) <= 1)")
     x, y = mesh.nodes[:, 0], mesh.nodes[:, 1]
     tol = 1e-3 * mesh_size(mesh)

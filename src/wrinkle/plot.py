@@ -95,9 +95,14 @@ def _read_history(path: Path) -> tuple[list[str], np.ndarray]:
     return header, values
 
 
-def _stop_note(message: str) -> str:
-    """Short note for a run that did not converge (the full message is in summary.json)."""
-    return "running" if message == "running" else "stopped: " + textwrap.shorten(message, 60)
+def _stop_note(message: str, width: int | None = None) -> str:
+    """Note for a run that did not converge: "still running" or "stopped", with the message
+    wrapped to ``width`` characters if given (it is always in summary.json)."""
+    if message == "running":
+        return "still running"
+    if width is None:
+        return "stopped before load factor 1"
+    return textwrap.fill("stopped: " + message, width)
 
 
 def _view_axes(x: np.ndarray) -> tuple[int, int]:
@@ -192,9 +197,10 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
         f"projected on the {AXIS_NAMES[axes[0]]}{AXIS_NAMES[axes[1]]}-plane "
         f"(seen along {AXIS_NAMES[3 - sum(axes)]})"
     )
-    step_title = f"load factor {last['load_factor']:.4g}"
+    where = f"load factor {last['load_factor']:.4g}"
     if not summary["converged"]:
-        step_title += " (" + _stop_note(summary["message"]) + ")"
+        where += " (" + _stop_note(summary["message"]) + ")"
+    where += f"\ndeformed membrane {view}"
     written = []
 
     # -- taut / wrinkled / slack, with the tension field --------------------------------------
@@ -223,7 +229,7 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
              if wrinkled.size else []),
         loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, title="elements",
     )
-    ax.set_title(f"Deformed membrane, {step_title}\n{view}", fontsize=10)
+    ax.set_title(f"Taut, wrinkled and slack elements\n{where}", fontsize=10)
     written.append(out_dir / "state.png")
     fig.savefig(written[-1], dpi=150)
     plt.close(fig)
@@ -243,11 +249,11 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
     bar.set_label(_with_unit("major principal stress resultant", stress_unit))
     note = ""
     if clipped:
-        note = (f"\ncolours clipped at the 98th percentile; "
+        note = (f"\ncolours clipped at the 98th percentile, "
                 f"maximum {major.max():.3g}{' ' + stress_unit if stress_unit else ''}")
     ax.set_title(
-        f"Major principal Cauchy stress (force per current length), {step_title}\n"
-        f"deformed membrane {view}{note}", fontsize=10,
+        f"Major principal Cauchy stress resultant (force per current length)\n{where}{note}",
+        fontsize=10,
     )
     written.append(out_dir / "principal_stress.png")
     fig.savefig(written[-1], dpi=150)
@@ -293,7 +299,7 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
         ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
         ax.grid(True, alpha=0.3)
     if not summary["converged"]:
-        fig.suptitle(_stop_note(summary["message"]), fontsize=9, color="firebrick")
+        fig.suptitle(_stop_note(summary["message"], 120), fontsize=9, color="firebrick")
     written.append(out_dir / "load_displacement.png")
     fig.savefig(written[-1], dpi=120)
     plt.close(fig)

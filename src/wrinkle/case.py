@@ -1,0 +1,334 @@
+"""Case files: a membrane analysis described in TOML, read into a ``Model``.
+
+A case has the tables ``[mesh]``, ``[material]`` (or ``[[material]]`` with ``region``),
+``[[support]]``, ``[[load]]``, ``[[probe]]``, ``[solver]`` and ``[output]``; README.md lists
+every key. Every error names the file, the table and the key at fault (``CaseError``).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from wrinkle.materials import NeoHookean, StVenantKirchhoff
+from wrinkle.mesh import Mesh, annulus, disk, read_mesh, rectangle
+from wrinkle.model import Model
+from wrinkle.selectors import evaluate_expression, select_nodes
+from wrinkle.solvers import SOLVERS
+
+
+class CaseError(ValueError):
+    """Bad input in a case file; the message names the file and the key."""
+
+
+@dataclass
+class Case:
+    """A case read from a file: the model plus how to solve and report it."""
+
+    path: Path
+    model: Model
+    solver: dict = field(default_factory=dict)  # keyword arguments of Model.solve
+    probes: dict[str, np.ndarray] = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
+
+    def solve(self, on_step=None):
+        """Solve the model with the case's solver settings."""
+        return self.model.solve(**self.solver, on_step=on_step)
+
+
+MATERIAL_MODELS = {
+    "svk": ("E", "nu"),
+    "svk-transverse": ("E_L", "E_T", "nu_LT", "nu_TT", "G_LT"),
+    "neo-hookean": ("mu",),
+}
+GENERATORS = {
+    "rectangle": (rectangle, ("width", "height", "nx", "ny"), ()),
+    "disk": (disk, ("outer_radius", "n_radial", "n_circumferential"), ()),
+    "annulus": (annulus, ("inner_radius", "outer_radius", "n_radial", "n_circumferential"), ()),
+}
+LOAD_KINDS = {
+    "pressure": ({"value"}, {"region"}),
+    "edge": ({"nodes"}, {"traction", "normal", "follow"}),
+    "nodal": ({"nodes", "force"}, set()),
+    "gravity": ({"acceleration", "density"}, {"region"}),
+}
+SOLVER_KEYS = {"method", "steps", "tolerance", "max_iterations", "min_step"}
+
+
+class _Reader:
+    """Typed access to the tables of one case file, with messages naming file and key."""
+
+    def __init__(self, path: Path):
+        self.path = path
+
+    def fail(self, where: str, message: str):
+        raise CaseError(f"{self.path}: {where}: {message}")
+
+    def keys(self, table: dict, where: str, required: set, optional: set) -> None:
+        unknown = sorted(set(table) - required - optional)
+        if unknown:
+            allowed = ", ".join(sorted(required | optional))
+            self.fail(where, f"unknown key '{unknown[0]}' (allowed: {allowed})")
+        missing = sorted(required - set(table))
+        if missing:
+            self.fail(where, f"missing key '{missing[0]}'")
+
+    def number(self, table: dict, key: str, where: str, positive=False, integer=False,
+               minimum=None):
+        value = table[key]
+        kind = int if integer else (int, float)
+        if isinstance(value, bool) or not isinstance(value, kind):
+            expected = "an integer" if integer else "a number"
+            self.fail(where, f"'{key}' must be {expected}, got {value!r}")
+        if not math.isfinite(value):
+            self.fail(where, f"'{key}' must be finite, got {value!r}")
+        if positive and not value > 0:
+            self.fail(where, f"'{key}' must be > 0, got {value!r}")
+        if minimum is not None and value < minimum:
+            self.fail(where, f"'{key}' must be >= {minimum}, got {value!r}")
+        return value
+
+    def string(self, table: dict, key: str, where: str) -> str:
+        value = table[key]
+        if not isinstance(value, str):
+            self.fail(where, f"'{key}' must be a string, got {value!r}")
+        return value
+
+    def vector(self, table: dict, key: str, where: str, allow_free=False, expressions=False):
+        """A list of 3 numbers (or expression strings, or "free" where allowed)."""
+        value = table[key]
+        if not isinstance(value, list) or len(value) != 3:
+            self.fail(where, f"'{key}' must be a list of 3 values [x, y, z], got {value!r}")
+        for item in value:
+            ok = isinstance(item, (int, float)) and not isinstance(item, bool)
+            ok = ok or (allow_free and item == "free") or (expressions and isinstance(item, str))
+            if not ok:
+                self.fail(where, f"'{key}' has a bad component {item!r}")
+        return value
+
+    def nodes(self, mesh: Mesh, table: dict, where: str) -> np.ndarray:
+        try:
+            return select_nodes(mesh, self.string(table, "nodes", where))
+        except (ValueError, TypeError) as error:
+            self.fail(where, f"nodes: {error}")
+
+    def elements(self, mesh: Mesh, table: dict, where: str):
+        if "region" not in table:
+            return None
+        region = self.string(table, "region", where)
+        if region not in mesh.element_sets:
+            known = ", ".join(sorted(mesh.element_sets)) or "none"
+            self.fail(where, f"region '{region}' is not a physical group of elements "
+                             f"(the mesh has: {known})")
+        return mesh.element_sets[region]
+
+
+def read_case(path: str | Path) -> Case:
+    """Read a TOML case file into a ``Case`` (model, solver settings, probes, units).
+
+    Raises CaseError (a ValueError) naming the file and key for any bad input.
+    """
+    path = Path(path)
+    reader = _Reader(path)
+    if not path.is_file():
+        raise CaseError(f"{path}: case file not found")
+    try:
+        data = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise CaseError(f"{path}: not valid TOML: {error}") from None
+    reader.keys(data, "top level", {"mesh", "material"},
+                {"support", "load", "probe", "solver", "title"})
+
+    mesh, units = _read_mesh(reader, data["mesh"], path.parent)
+    model = Model(mesh)
+    materials = data["material"] if isinstance(data["material"], list) else [data["material"]]
+    for index, table in enumerate(materials):
+        _read_material(reader, model, table, f"[[material]] {index + 1}" if len(materials) > 1
+                       else "[material]")
+    supports = data.get("support", [])
+    if not isinstance(supports, list) or not supports:
+        reader.fail("[[support]]", "at least one support is needed")
+    for index, table in enumerate(supports):
+        _read_support(reader, model, table, f"[[support]] {index + 1}")
+    for index, table in enumerate(data.get("load", [])):
+        _read_load(reader, model, table, f"[[load]] {index + 1}")
+    probes = {}
+    for index, table in enumerate(data.get("probe", [])):
+        where = f"[[probe]] {index + 1}"
+        reader.keys(table, where, {"nodes"}, {"name"})
+        name = reader.string(table, "name", where) if "name" in table else table["nodes"]
+        probes[str(name)] = reader.nodes(mesh, table, where)
+    solver = _read_solver(reader, data.get("solver", {}))
+    try:
+        model.check_supports()
+    except ValueError as error:
+        reader.fail("[[support]]", str(error))
+    return Case(path, model, solver, probes, units)
+
+
+def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:
+    where = "[mesh]"
+    if not isinstance(table, dict):
+        reader.fail(where, "must be a table")
+    sources = [key for key in ("file", *GENERATORS) if key in table]
+    reader.keys(table, where, set(), {"file", "units", *GENERATORS})
+    if len(sources) != 1:
+        reader.fail(where, "give exactly one of 'file', " + ", ".join(f"'{g}'" for g in GENERATORS))
+    units = {}
+    if "units" in table:
+        units_table = table["units"]
+        if isinstance(units_table, str):
+            units = {"note": units_table}
+        elif isinstance(units_table, dict):
+            units = {str(k): str(v) for k, v in units_table.items()}
+        else:
+            reader.fail(where, "'units' must be a string or a table such as "
+                               '{length = "m", force = "N"}')
+    source = sources[0]
+    try:
+        if source == "file":
+            file = folder / reader.string(table, "file", where)
+            return read_mesh(file), units
+        generator, keys, _ = GENERATORS[source]
+        parameters = table[source]
+        sub = f"[mesh] {source}"
+        if not isinstance(parameters, dict):
+            reader.fail(sub, "must be a table, e.g. {width = 1.0, height = 1.0, nx = 10, ny = 10}")
+        optional = {"inner_radius"} if source == "disk" else set()
+        reader.keys(parameters, sub, set(keys), optional)
+        values = [reader.number(parameters, key, sub, positive=True, integer=key.startswith("n"))
+                  for key in keys]
+        return generator(*values), units
+    except CaseError:
+        raise
+    except (ValueError, ImportError, OSError) as error:
+        reader.fail(where, str(error))
+
+
+def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> None:
+    if not isinstance(table, dict):
+        reader.fail(where, "must be a table")
+    if "model" not in table:
+        reader.fail(where, "missing key 'model' (one of " + ", ".join(MATERIAL_MODELS) + ")")
+    name = reader.string(table, "model", where)
+    if name not in MATERIAL_MODELS:
+        reader.fail(where, f"unknown model '{name}' (one of " + ", ".join(MATERIAL_MODELS) + ")")
+    parameters = MATERIAL_MODELS[name]
+    optional = {"model", "direction", "angle", "region"} | ({"lmbda"} if name == "neo-hookean"
+                                                             else set())
+    reader.keys(table, where, {*parameters, "thickness"}, optional)
+    values = {key: reader.number(table, key, where) for key in (*parameters, "thickness")}
+    if "lmbda" in table:
+        values["lmbda"] = reader.number(table, "lmbda", where)
+    try:
+        if name == "svk":
+            material = StVenantKirchhoff.isotropic(**values)
+        elif name == "svk-transverse":
+            material = StVenantKirchhoff.transversely_isotropic(**values)
+        else:
+            material = NeoHookean(**values)
+    except ValueError as error:
+        reader.fail(where, str(error))
+    direction = None
+    if "direction" in table:
+        direction = reader.vector(table, "direction", where)
+        if not any(direction):
+            reader.fail(where, "'direction' must not be zero")
+    angle = math.radians(reader.number(table, "angle", where)) if "angle" in table else None
+    try:
+        model.assign_material(material, reader.elements(model.mesh, table, where),
+                              fibre_direction=direction, fibre_angle=angle)
+    except ValueError as error:
+        reader.fail(where, str(error))
+
+
+def _read_support(reader: _Reader, model: Model, table: dict, where: str) -> None:
+    reader.keys(table, where, {"nodes"}, {"fix", "displacement", "label"})
+    if ("fix" in table) == ("displacement" in table):
+        reader.fail(where, "give either 'fix' or 'displacement'")
+    nodes = reader.nodes(model.mesh, table, where)
+    label = reader.string(table, "label", where) if "label" in table else table["nodes"]
+    if "fix" in table:
+        fix = table["fix"]
+        if not isinstance(fix, list) or not fix or any(c not in ("x", "y", "z") for c in fix):
+            reader.fail(where, f"'fix' must be a list drawn from \"x\", \"y\", \"z\", got {fix!r}")
+        model.fix(nodes, fix, label=label)
+        return
+    components = reader.vector(table, "displacement", where, allow_free=True, expressions=True)
+    X = model.mesh.nodes[nodes]
+    values = np.full((nodes.size, 3), np.nan)
+    for c, value in enumerate(components):
+        if value == "free":
+            continue
+        try:
+            values[:, c] = evaluate_expression(value, X)
+        except ValueError as error:
+            reader.fail(where, f"displacement {'xyz'[c]}: {error}")
+    model.prescribe(nodes, values, label=label)
+
+
+def _read_load(reader: _Reader, model: Model, table: dict, where: str) -> None:
+    if "kind" not in table:
+        reader.fail(where, "missing key 'kind' (one of " + ", ".join(LOAD_KINDS) + ")")
+    kind = reader.string(table, "kind", where)
+    if kind not in LOAD_KINDS:
+        reader.fail(where, f"unknown kind '{kind}' (one of " + ", ".join(LOAD_KINDS) + ")")
+    required, optional = LOAD_KINDS[kind]
+    reader.keys(table, where, required | {"kind"}, optional)
+    mesh = model.mesh
+    try:
+        if kind == "pressure":
+            model.add_pressure(reader.number(table, "value", where),
+                               reader.elements(mesh, table, where))
+        elif kind == "nodal":
+            model.add_nodal_force(reader.nodes(mesh, table, where),
+                                  reader.vector(table, "force", where))
+        elif kind == "gravity":
+            model.add_gravity(reader.vector(table, "acceleration", where),
+                              reader.number(table, "density", where, positive=True),
+                              reader.elements(mesh, table, where))
+        else:
+            if ("traction" in table) == ("normal" in table):
+                reader.fail(where, "an edge load needs either 'traction' or 'normal'")
+            follow = table.get("follow", False)
+            if not isinstance(follow, bool):
+                reader.fail(where, f"'follow' must be true or false, got {follow!r}")
+            if follow and "traction" in table:
+                reader.fail(where, "'follow' applies to 'normal' edge loads only")
+            model.add_edge_load(
+                reader.nodes(mesh, table, where),
+                traction=reader.vector(table, "traction", where) if "traction" in table else None,
+                normal=reader.number(table, "normal", where) if "normal" in table else None,
+                follow=follow,
+            )
+    except CaseError:
+        raise
+    except ValueError as error:
+        reader.fail(where, str(error))
+
+
+def _read_solver(reader: _Reader, table: dict) -> dict:
+    where = "[solver]"
+    if not isinstance(table, dict):
+        reader.fail(where, "must be a table")
+    reader.keys(table, where, set(), SOLVER_KEYS)
+    solver = {}
+    if "method" in table:
+        method = reader.string(table, "method", where)
+        if method not in SOLVERS:
+            reader.fail(where, f"unknown method '{method}' (one of {', '.join(SOLVERS)})")
+        solver["method"] = method
+    if "steps" in table:
+        solver["steps"] = reader.number(table, "steps", where, integer=True, minimum=1)
+    if "tolerance" in table:
+        solver["tolerance"] = reader.number(table, "tolerance", where, positive=True)
+    if "max_iterations" in table:
+        solver["max_iterations"] = reader.number(table, "max_iterations", where, integer=True,
+                                                 minimum=1)
+    if "min_step" in table:
+        solver["min_step"] = reader.number(table, "min_step", where, positive=True)
+    return solver
