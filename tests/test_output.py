@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import json
+import sys
 from pathlib import Path
 from xml.etree import ElementTree
 
@@ -303,3 +304,12 @@ def test_bad_probe_is_refused_by_name(solved, tmp_path, probe, message):
     model, _ = solved
     with pytest.raises(ValueError, match=f"probe 'tip'.*{message}"):
         ResultWriter(tmp_path, model, probes={"tip": probe})
+
+
+def test_without_meshio_the_message_says_what_to_install(solved, tmp_path, monkeypatch):
+    model, results = solved
+    writer = ResultWriter(tmp_path, model)
+    monkeypatch.setitem(sys.modules, "meshio", None)  # import meshio fails
+    with pytest.raises(ImportError, match=r'pip install "wrinkle\[io\]"'):
+        writer.write_step(results.steps[0])
+    assert {p.name for p in tmp_path.iterdir()} == WRITTEN

@@ -1,4 +1,8 @@
-"""Command line: ``wrinkle demo --out DIR``."""
+"""Command line: ``wrinkle run CASE --out DIR``, ``wrinkle plot DIR``, ``wrinkle demo``.
+
+Exit status: 0 done; 1 a load step did not converge (every converged step is on disk);
+2 bad input (a one-line message naming the file, key, node or element).
+"""
 
 from __future__ import annotations
 
@@ -23,6 +27,47 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run(args: argparse.Namespace) -> int:
+    from wrinkle.case import read_case
+    from wrinkle.output import ResultWriter
+    from wrinkle.progress import Progress
+
+    case = read_case(args.case)
+    writer = ResultWriter(args.out, case.model, probes=case.probes, units=case.units,
+                          case=args.case)
+    progress = Progress(quiet=args.quiet)
+
+    def on_step(step):
+        writer.write_step(step)
+        progress.step(step)
+
+    try:
+        case.solve(on_step=on_step)
+    except ConvergenceError as error:
+        progress.close()
+        writer.finish(False, f"not converged: {error}")
+        print(f"wrinkle: {args.case}: not converged: {error}", file=sys.stderr)
+        print(f"wrinkle: the converged steps are in {args.out}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        progress.close()
+        writer.finish(False, "interrupted")
+        print(f"wrinkle: interrupted; the converged steps are in {args.out}", file=sys.stderr)
+        return 130
+    writer.finish(True, "converged to load factor 1")
+    if not args.quiet:
+        print(f"wrote {args.out}/results.pvd, summary.json, history.csv")
+    return 0
+
+
+def _plot(args: argparse.Namespace) -> int:
+    from wrinkle.plot import plot_results
+
+    for path in plot_results(Path(args.directory)):
+        print(f"wrote {path}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="wrinkle", description="Finite-element analysis of wrinkling membranes."
@@ -35,6 +80,14 @@ def main(argv: list[str] | None = None) -> int:
     demo.add_argument("--out", default="demo-results", help="output directory")
     demo.add_argument("--method", choices=sorted(SOLVERS), default="newton")
     demo.set_defaults(run=_demo)
+    run = sub.add_parser("run", help="run the analysis described by a TOML case file")
+    run.add_argument("case", help="case file (TOML)")
+    run.add_argument("--out", default="results", help="output directory")
+    run.add_argument("-q", "--quiet", action="store_true", help="no progress display")
+    run.set_defaults(run=_run)
+    plot = sub.add_parser("plot", help="pictures of the results in a directory")
+    plot.add_argument("directory", help="directory written by wrinkle run")
+    plot.set_defaults(run=_plot)
     args = parser.parse_args(argv)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING, format="%(message)s"
@@ -44,6 +97,9 @@ def main(argv: list[str] | None = None) -> int:
     except ConvergenceError as error:
         print(f"wrinkle: not converged: {error}", file=sys.stderr)
         return 1
+    except (ValueError, OSError, ImportError) as error:  # bad input: one line, no traceback
+        print(f"wrinkle: {error}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

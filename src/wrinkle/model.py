@@ -47,10 +47,13 @@ def _component_indices(components: str | Sequence[str]) -> list[int]:
 
 @dataclass
 class Support:
-    """A named set of supported nodes; its reaction is the sum over its nodes."""
+    """A named set of supported nodes and the dofs it holds; its reaction is the sum over
+    those dofs (a node held by two supports in different directions counts in each for the
+    directions it holds there)."""
 
     label: str
     nodes: np.ndarray
+    dofs: np.ndarray
 
 
 class Model:
@@ -187,16 +190,17 @@ class Model:
             raise ValueError(f"node {nodes[bad][0]} does not exist (mesh has {self.mesh.n_nodes})")
         return nodes.astype(np.int64)
 
-    def _add_support(self, nodes: np.ndarray, label: str | None) -> None:
-        self.supports.append(Support(label or f"support {len(self.supports) + 1}", nodes))
+    def _add_support(self, nodes: np.ndarray, dofs: np.ndarray, label: str | None) -> None:
+        label = label or f"support {len(self.supports) + 1}"
+        self.supports.append(Support(label, nodes, np.unique(dofs)))
 
     def fix(self, nodes, components: str | Sequence[str] = "xyz", label: str | None = None) -> None:
         """Hold the given displacement components of ``nodes`` at zero."""
         nodes = self._node_indices(nodes)
-        for c in _component_indices(components):
-            self.constrained[DOFS_PER_NODE * nodes + c] = True
-            self.prescribed[DOFS_PER_NODE * nodes + c] = 0.0
-        self._add_support(nodes, label)
+        dofs = (DOFS_PER_NODE * nodes[:, None] + np.array(_component_indices(components))).ravel()
+        self.constrained[dofs] = True
+        self.prescribed[dofs] = 0.0
+        self._add_support(nodes, dofs, label)
 
     def prescribe(self, nodes, displacement, label: str | None = None) -> None:
         """Prescribe displacements reached at load factor 1.
@@ -209,7 +213,7 @@ class Model:
         set_ = ~np.isnan(values)
         self.constrained[dofs[set_]] = True
         self.prescribed[dofs[set_]] = values[set_]
-        self._add_support(nodes, label)
+        self._add_support(nodes, dofs[set_], label)
 
     def add_nodal_force(self, nodes, force) -> None:
         """Add a dead nodal force (3,) or (k, 3), reached at load factor 1."""
@@ -345,9 +349,13 @@ class Model:
         return np.where(self.constrained, self.internal_forces(u) - external, 0.0)
 
     def support_reactions(self, reactions: np.ndarray) -> dict[str, list[float]]:
-        """Sum of the reactions (n_dofs,) over each support's nodes: label -> [Fx, Fy, Fz]."""
-        per_node = reactions.reshape(-1, 3)
-        return {s.label: per_node[s.nodes].sum(axis=0).tolist() for s in self.supports}
+        """Sum of the reactions (n_dofs,) over the dofs each support holds (supports with the
+        same label together): label -> [Fx, Fy, Fz]."""
+        out: dict[str, np.ndarray] = {}
+        for support in self.supports:
+            force = out.setdefault(support.label, np.zeros(3))
+            force += np.bincount(support.dofs % 3, reactions[support.dofs], minlength=3)
+        return {label: force.tolist() for label, force in out.items()}
 
     def problem(self, load_factor: float = 1.0, prescribed: np.ndarray | None = None):
         """The nonlinear problem at one load level (see ``StepProblem``)."""

@@ -54,7 +54,8 @@ STEP_FILE = re.compile(r"step_\d{4,}\.vtu")
 STATE_NAMES = ("taut", "wrinkled", "slack")
 
 
-def _meshio():
+def require_meshio():
+    """The meshio module, or ImportError saying how to install it."""
     try:
         import meshio
     except ImportError:  # pragma: no cover - depends on the installation
@@ -189,7 +190,7 @@ class ResultWriter:
 
     # -- files --------------------------------------------------------------------------
     def _write_vtu(self, path: Path, step) -> None:
-        meshio = _meshio()
+        meshio = require_meshio()
         mesh = self.model.mesh
         report = element_report(self.model, np.asarray(step.displacement, dtype=float))
         cell_data = {

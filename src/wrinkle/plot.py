@@ -143,20 +143,6 @@ def _tension_lines(
     return np.stack([centre - half, centre + half], axis=1), sampled
 
 
-def _map_axes(plt, xy: np.ndarray, axes: tuple[int, int], length_unit: str, width: float = 7.5):
-    """A figure with one axes sized to the projected membrane xy (n, 2), equal aspect."""
-    span = np.ptp(xy, axis=0)
-    aspect = float(np.clip(span[1] / span[0], 0.25, 2.0)) if span[0] > 0 else 1.0
-    fig, ax = plt.subplots(figsize=(width, 1.3 + (width - 2.4) * aspect), layout="constrained")
-    ax.set_aspect("equal")
-    ax.set_xlabel(_with_unit(AXIS_NAMES[axes[0]], length_unit))
-    ax.set_ylabel(_with_unit(AXIS_NAMES[axes[1]], length_unit))
-    margin = 0.03 * max(span.max(), 1e-300)
-    ax.set_xlim(xy[:, 0].min() - margin, xy[:, 0].max() + margin)
-    ax.set_ylim(xy[:, 1].min() - margin, xy[:, 1].max() + margin)
-    return fig, ax
-
-
 def plot_results(out_dir: str | os.PathLike) -> list[Path]:
     """Pictures of the results that ``wrinkle.output.ResultWriter`` wrote into ``out_dir``.
 
@@ -164,13 +150,14 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
     ``state.png``, the deformed membrane (reference + displacement, true scale) projected onto
     the plane of the two coordinate axes along which it extends most (named on the axes),
     elements coloured taut / wrinkled / slack, with a tension-field line through the centroid
-    of every wrinkled element along its tension direction (0.7 of the element size);
-    ``principal_stress.png``, the major principal Cauchy stress resultant (force per current
-    length) on the same view; ``load_displacement.png``, the mean displacement of each probe
-    (magnitude and components) against the load factor, or the largest nodal displacement
-    if there are no probes. Returns the paths of the three files.
+    of every wrinkled element along its tension direction (0.7 of the element size; one per
+    small square of the view on fine meshes); ``principal_stress.png``, the major principal
+    Cauchy stress resultant (force per current length) on the same view;
+    ``load_displacement.png``, the mean displacement of each probe (magnitude and components)
+    against the load factor, or the largest nodal displacement if there are no probes.
+    Returns the paths of the three files. Raises ValueError if no step has been written.
     """
-    from wrinkle.output import HISTORY, STATE_NAMES, SUMMARY, _meshio
+    from wrinkle.output import HISTORY, SUMMARY, require_meshio
 
     out_dir = Path(out_dir)
     summary = json.loads((out_dir / SUMMARY).read_text(encoding="utf-8"))
@@ -178,101 +165,129 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
         raise ValueError(f"{out_dir / SUMMARY}: no converged step to plot")
     last = summary["steps"][-1]
     units = summary.get("units") or {}
-    length_unit = _unit(units, "length")
-    vtu = _meshio().read(out_dir / last["file"])
-    triangles = vtu.cells_dict["triangle"]
+    vtu = require_meshio().read(out_dir / last["file"])
     cell = {name: vtu.cell_data_dict[name]["triangle"] for name in vtu.cell_data}
     x = vtu.points + vtu.point_data["displacement"]
-    axes = _view_axes(x)
-    xy = x[:, axes]
+    view = _View(x, vtu.cells_dict["triangle"], _unit(units, "length"))
+    where = f"load factor {last['load_factor']:.4g}"
+    if not summary["converged"]:
+        where += " (" + _stop_note(summary["message"]) + ")"
+    where += f"\ndeformed membrane {view.name}"
     plt = _pyplot()
+    paths = [
+        _plot_states(plt, view, cell, where, out_dir / "state.png"),
+        _plot_major_stress(plt, view, cell, where, _unit(units, "stress"),
+                           out_dir / "principal_stress.png"),
+        _plot_load_displacement(plt, summary, out_dir / HISTORY, _unit(units, "length"),
+                                out_dir / "load_displacement.png"),
+    ]
+    return paths
+
+
+class _View:
+    """The deformed mesh x (n, 3), triangles (m, 3) seen along the axis of its smallest
+    extent: ``axes`` the two coordinate axes drawn, ``xy`` (n, 2) the projected nodes."""
+
+    def __init__(self, x: np.ndarray, triangles: np.ndarray, length_unit: str):
+        self.x, self.triangles, self.length_unit = x, triangles, length_unit
+        self.axes = _view_axes(x)
+        self.xy = x[:, self.axes]
+        self.fine = triangles.shape[0] > 3000  # no element edges: they would hide the colours
+        a, b = (AXIS_NAMES[i] for i in self.axes)
+        self.name = f"projected on the {a}{b}-plane (seen along {AXIS_NAMES[3 - sum(self.axes)]})"
+
+    def figure(self, plt, width: float = 7.5):
+        """A figure with one axes sized to the projected membrane, equal aspect, labelled."""
+        xy = self.xy
+        span = np.ptp(xy, axis=0)
+        aspect = float(np.clip(span[1] / span[0], 0.25, 2.0)) if span[0] > 0 else 1.0
+        fig, ax = plt.subplots(figsize=(width, 1.3 + (width - 2.4) * aspect),
+                               layout="constrained")
+        ax.set_aspect("equal")
+        ax.set_xlabel(_with_unit(AXIS_NAMES[self.axes[0]], self.length_unit))
+        ax.set_ylabel(_with_unit(AXIS_NAMES[self.axes[1]], self.length_unit))
+        margin = 0.03 * max(span.max(), 1e-300)
+        ax.set_xlim(xy[:, 0].min() - margin, xy[:, 0].max() + margin)
+        ax.set_ylim(xy[:, 1].min() - margin, xy[:, 1].max() + margin)
+        return fig, ax
+
+
+def _plot_states(plt, view: _View, cell: dict, where: str, path: Path) -> Path:
+    """Elements coloured taut / wrinkled / slack, tension-field lines in the wrinkled ones."""
     from matplotlib.collections import LineCollection, PolyCollection
     from matplotlib.colors import to_rgba_array
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    n_elements = triangles.shape[0]
-    fine = n_elements > 3000  # thin lines, no element edges: they would hide the colours
-    view = (
-        f"projected on the {AXIS_NAMES[axes[0]]}{AXIS_NAMES[axes[1]]}-plane "
-        f"(seen along {AXIS_NAMES[3 - sum(axes)]})"
-    )
-    where = f"load factor {last['load_factor']:.4g}"
-    if not summary["converged"]:
-        where += " (" + _stop_note(summary["message"]) + ")"
-    where += f"\ndeformed membrane {view}"
-    written = []
-
-    # -- taut / wrinkled / slack, with the tension field --------------------------------------
-    fig, ax = _map_axes(plt, xy, axes, length_unit, width=8.5)
+    fig, ax = view.figure(plt, width=8.5)
     state = cell["state"].astype(int)
     colours = to_rgba_array(list(STATE_COLOURS.values()))
-    corners = xy[triangles]  # (m, 3, 2)
     ax.add_collection(PolyCollection(
-        corners, facecolors=colours[np.clip(state, 0, 2)],
-        edgecolors="face" if fine else "white", linewidths=0.2 if fine else 0.6,
+        view.xy[view.triangles], facecolors=colours[np.clip(state, 0, 2)],
+        edgecolors="face" if view.fine else "white", linewidths=0.2 if view.fine else 0.6,
     ))
-    wrinkled = np.flatnonzero(state == STATE_NAMES.index("wrinkled"))
-    segments, sampled = _tension_lines(x, triangles[wrinkled], cell["tension_direction"][wrinkled],
-                                       axes)
+    wrinkled = np.flatnonzero(state == list(STATE_COLOURS).index("wrinkled"))
+    handles = [
+        Patch(facecolor=colour, edgecolor="0.4", label=f"{name} ({np.count_nonzero(state == k)})")
+        for k, (name, colour) in enumerate(STATE_COLOURS.items())
+    ]
     if wrinkled.size:
+        segments, sampled = _tension_lines(
+            view.x, view.triangles[wrinkled], cell["tension_direction"][wrinkled], view.axes
+        )
         ax.add_collection(LineCollection(
             segments, colors="#202020", linewidths=0.8 if sampled else 1.2, capstyle="round",
         ))
-    counts = [int(np.count_nonzero(state == k)) for k in range(3)]
-    ax.legend(
-        handles=[
-            Patch(facecolor=colour, edgecolor="0.4", label=f"{name} ({count})")
-            for (name, colour), count in zip(STATE_COLOURS.items(), counts)
-        ] + ([Line2D([], [], color="#202020", lw=1.2,
-                     label="tension lines" + (",\nsampled" if sampled else ""))]
-             if wrinkled.size else []),
-        loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, title="elements",
-    )
+        handles.append(Line2D([], [], color="#202020", lw=1.2,
+                              label="tension lines" + (",\nsampled" if sampled else "")))
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+              borderaxespad=0.0, title="elements")
     ax.set_title(f"Taut, wrinkled and slack elements\n{where}", fontsize=10)
-    written.append(out_dir / "state.png")
-    fig.savefig(written[-1], dpi=150)
+    fig.savefig(path, dpi=150)
     plt.close(fig)
+    return path
 
-    # -- major principal stress ---------------------------------------------------------------
-    fig, ax = _map_axes(plt, xy, axes, length_unit)
+
+def _plot_major_stress(plt, view: _View, cell: dict, where: str, unit: str, path: Path) -> Path:
+    """Map of the major principal stress; a concentration above 1.5 times the 98th
+    percentile is clipped so that it does not wash out the rest (said in the title)."""
+    fig, ax = view.figure(plt)
     major = cell["principal_stress"][:, 1]
-    stress_unit = _unit(units, "stress")
     top = float(np.percentile(major, 98))
-    clipped = major.max() > 1.5 * top > 0  # a concentration would wash out the rest: clip
+    clipped = major.max() > 1.5 * top > 0
     image = ax.tripcolor(
-        xy[:, 0], xy[:, 1], triangles, facecolors=major, cmap="viridis",
+        view.xy[:, 0], view.xy[:, 1], view.triangles, facecolors=major, cmap="viridis",
         vmin=min(0.0, float(major.min())), vmax=top if clipped else float(major.max()),
-        edgecolors="face" if fine else "white", linewidth=0.2 if fine else 0.4,
+        edgecolors="face" if view.fine else "white", linewidth=0.2 if view.fine else 0.4,
     )
     bar = fig.colorbar(image, ax=ax, shrink=0.9, extend="max" if clipped else "neither")
-    bar.set_label(_with_unit("major principal stress resultant", stress_unit))
+    bar.set_label(_with_unit("major principal stress resultant", unit))
     note = ""
     if clipped:
         note = (f"\ncolours clipped at the 98th percentile, "
-                f"maximum {major.max():.3g}{' ' + stress_unit if stress_unit else ''}")
+                f"maximum {major.max():.3g}{' ' + unit if unit else ''}")
     ax.set_title(
         f"Major principal Cauchy stress resultant (force per current length)\n{where}{note}",
         fontsize=10,
     )
-    written.append(out_dir / "principal_stress.png")
-    fig.savefig(written[-1], dpi=150)
+    fig.savefig(path, dpi=150)
     plt.close(fig)
+    return path
 
-    # -- load-displacement --------------------------------------------------------------------
-    header, history = _read_history(out_dir / HISTORY)
+
+def _plot_load_displacement(plt, summary: dict, history_path: Path, length_unit: str,
+                            path: Path) -> Path:
+    """Probe displacements (or the largest displacement) against the load factor."""
+    header, history = _read_history(history_path)
     load = history[:, header.index("load_factor")]
     probes = [name[:-3] for name in header if name.endswith("_ux")]
     if probes:
-        fig, (ax_magnitude, ax_parts) = plt.subplots(
-            1, 2, figsize=(11, 4.5), layout="constrained"
-        )
+        fig, (ax_magnitude, ax_parts) = plt.subplots(1, 2, figsize=(11, 4.5),
+                                                     layout="constrained")
         cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
         for k, probe in enumerate(probes):
             colour = cycle[k % len(cycle)]
-            u = np.stack(
-                [history[:, header.index(f"{probe}_u{c}")] for c in AXIS_NAMES], axis=1
-            )
+            u = history[:, [header.index(f"{probe}_u{c}") for c in AXIS_NAMES]]
             ax_magnitude.plot(load, np.linalg.norm(u, axis=1), "o-", color=colour, ms=4,
                               label=probe)
             for c, style in zip(range(3), ("-", "--", ":")):
@@ -300,7 +315,6 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
         ax.grid(True, alpha=0.3)
     if not summary["converged"]:
         fig.suptitle(_stop_note(summary["message"], 120), fontsize=9, color="firebrick")
-    written.append(out_dir / "load_displacement.png")
-    fig.savefig(written[-1], dpi=120)
+    fig.savefig(path, dpi=120)
     plt.close(fig)
-    return written
+    return path
