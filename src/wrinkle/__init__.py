@@ -5,7 +5,8 @@ Numerical Analysis", J. Appl. Mech. 54 (1987) 888-892.
 """
 
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
-from wrinkle.mesh import Mesh, rectangle
+from wrinkle.case import read_case
+from wrinkle.mesh import Mesh, annulus, disk, read_mesh, rectangle
 from wrinkle.model import Model, Results
 from wrinkle.point import material_response
 from wrinkle.solvers import ConvergenceError
@@ -15,5 +16,5 @@ __version__ = "0.1.0"
 
 __all__ = [
     "ConvergenceError", "Mesh", "Model", "NeoHookean", "Results", "StVenantKirchhoff",
-    "Wrinkling", "material_response", "rectangle",
+    "Wrinkling", "annulus", "disk", "material_response", "read_case", "read_mesh", "rectangle",
 ]

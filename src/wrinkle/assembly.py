@@ -78,11 +78,10 @@ class SparsityPattern:
         # every time.
         block_base = (6 * block_ptr[triangles])[:, :, None] + 3 * block  # (n, 3, 3)
         row_step = 3 * degree[triangles]  # (n, 3)
-        self.element_to_data = (
-            block_base[:, :, None, :, None]
-            + row_step[:, :, None, None, None] * i[:, None, None]
-            + j
-        ).astype(np.intp, copy=False).reshape(-1)
+        element_to_data = (
+            block_base[:, :, None, :, None] + row_step[:, :, None, None, None] * i[:, None, None] + j
+        )
+        self.element_to_data = element_to_data.astype(np.intp, copy=False).reshape(-1)
         nodes = np.arange(n_nodes)
         diagonal_block = np.searchsorted(keys, nodes * (n_nodes + 1))
         self.diagonal = self._position(

@@ -376,7 +376,7 @@ class Model:
         self,
         steps: int = 1,
         method: str = "newton",
-        tolerance: float = 1e-8,
+        tolerance: float = 1e-6,
         max_iterations: int | None = None,
         min_step: float = 1e-4,
         u0: np.ndarray | None = None,

@@ -7,7 +7,7 @@ from wrinkle.solvers.restricted_step import RestrictedStep
 SOLVERS = {"newton": RegularisedNewton, "restricted-step": RestrictedStep}
 
 
-def make_solver(method: str = "newton", tolerance: float = 1e-8, max_iterations: int | None = None):
+def make_solver(method: str = "newton", tolerance: float = 1e-6, max_iterations: int | None = None):
     """Solver by name: "newton" (default) or "restricted-step"; max_iterations None takes the
     method's default (50 for Newton, 300 for the slower restricted step)."""
     try:

@@ -142,7 +142,7 @@ class RegularisedSolver:
     default_max_iterations = 50
     max_rejections = 40
 
-    def __init__(self, tolerance: float = 1e-8, max_iterations: int | None = None):
+    def __init__(self, tolerance: float = 1e-6, max_iterations: int | None = None):
         if not tolerance > 0:
             raise ValueError(f"solver tolerance must be > 0, got {tolerance}")
         if max_iterations is None:
