@@ -189,3 +189,69 @@ def test_python_api_matches_case(tmp_path):
     direct.save(tmp_path / "out")
     assert (tmp_path / "out" / "results.pvd").exists()
     shutil.rmtree(tmp_path / "out")
+
+
+STRIP_SUPPORTS = """
+[[support]]
+nodes = "x == 0"
+fix = ["x", "z"]
+[[support]]
+nodes = "x == 0 and y == 0"
+fix = ["y"]
+[[support]]
+nodes = "x == 2"
+displacement = [0.01, "free", 0.0]
+[[support]]
+nodes = "x > 0 and x < 2"
+fix = ["z"]
+"""
+STRIP_MATERIAL = """model = "svk-transverse"
+E_L = 5.0
+E_T = 1.0
+nu_LT = 0.0
+nu_TT = 0.0
+G_LT = 0.4
+thickness = 1.0
+"""
+
+
+@pytest.mark.parametrize("source", ["regions", "cell data"])
+def test_fibre_directions_per_region_or_from_cell_data(tmp_path, source):
+    """A strip pulled along x, fibres along x in its left half and along y in its right half,
+    given by two [[material]] regions (physical groups of a gmsh file) or by per-element cell
+    data of a .vtu file. The halves are in series with moduli E_L = 5 and E_T = 1 along x
+    (nu = 0): the same force P = E l (l^2 - 1)/2 in both, stretches l adding up to 2.01."""
+    from scipy.optimize import brentq
+
+    import wrinkle
+
+    mesh = wrinkle.rectangle(2.0, 1.0, 4, 2)
+    left = mesh.nodes[mesh.triangles].mean(axis=1)[:, 0] < 1.0
+    cells = [("triangle", mesh.triangles[left]), ("triangle", mesh.triangles[~left])]
+    if source == "regions":
+        tags = [np.full(left.sum(), 1), np.full((~left).sum(), 2)]
+        meshio.write(
+            tmp_path / "strip.msh",
+            meshio.Mesh(mesh.nodes, cells,
+                        cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
+                        field_data={"left": np.array([1, 2]), "right": np.array([2, 2])}),
+            file_format="gmsh22", binary=False,
+        )
+        materials = (f'[mesh]\nfile = "strip.msh"\n'
+                     f'[[material]]\nregion = "left"\ndirection = [1.0, 0.0, 0.0]\n'
+                     f"{STRIP_MATERIAL}"
+                     f'[[material]]\nregion = "right"\ndirection = [0.0, 1.0, 0.0]\n'
+                     f"{STRIP_MATERIAL}")
+    else:
+        fibre = np.where(left[:, None], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+        meshio.write(tmp_path / "strip.vtu", meshio.Mesh(
+            mesh.nodes, cells, cell_data={"fibre": [fibre[left], fibre[~left]]}))
+        materials = (f'[mesh]\nfile = "strip.vtu"\n'
+                     f'[material]\ndirection = "fibre"\n{STRIP_MATERIAL}')
+    case = tmp_path / "case.toml"
+    case.write_text(materials + STRIP_SUPPORTS)
+    model = wrinkle.read_case(case).model
+    u = model.solve(tolerance=1e-12).final.displacement.reshape(-1, 3)
+    middle = np.isclose(model.mesh.nodes[:, 0], 1.0)
+    l1 = brentq(lambda a: 5 * a * (a**2 - 1) - (2.01 - a) * ((2.01 - a) ** 2 - 1), 1.0, 1.01)
+    np.testing.assert_allclose(u[middle, 0], l1 - 1.0, rtol=1e-8)

@@ -4,8 +4,8 @@ The method is Roddeman, Drukker, Oomens & Janssen, "The Wrinkling of Thin Membra
 Numerical Analysis", J. Appl. Mech. 54 (1987) 888-892.
 """
 
-from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.case import read_case
+from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.mesh import Mesh, annulus, disk, read_mesh, rectangle
 from wrinkle.model import Model, Results
 from wrinkle.point import material_response

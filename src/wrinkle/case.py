@@ -233,15 +233,23 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
             material = NeoHookean(**values)
     except ValueError as error:
         reader.fail(where, str(error))
+    elements = reader.elements(model.mesh, table, where)
     direction = None
-    if "direction" in table:
+    if isinstance(table.get("direction"), str):  # per element, from the mesh's cell data
+        name = table["direction"]
+        data = model.mesh.cell_data.get(name)
+        if data is None or data.shape != (model.mesh.n_elements, 3):
+            known = ", ".join(f"{k} {v.shape}" for k, v in model.mesh.cell_data.items())
+            reader.fail(where, f"'direction' names cell data '{name}', but the mesh has no "
+                               f"such (n_elements, 3) array (it has: {known or 'none'})")
+        direction = data if elements is None else data[elements]
+    elif "direction" in table:
         direction = reader.vector(table, "direction", where)
         if not any(direction):
             reader.fail(where, "'direction' must not be zero")
     angle = math.radians(reader.number(table, "angle", where)) if "angle" in table else None
     try:
-        model.assign_material(material, reader.elements(model.mesh, table, where),
-                              fibre_direction=direction, fibre_angle=angle)
+        model.assign_material(material, elements, fibre_direction=direction, fibre_angle=angle)
     except ValueError as error:
         reader.fail(where, str(error))
 

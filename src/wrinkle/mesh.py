@@ -21,6 +21,8 @@ class Mesh:
     triangles: (n_elements, 3) node indices, counter-clockwise seen from the membrane normal.
     node_sets: named (k,) arrays of node indices (e.g. physical groups, edges).
     element_sets: named (k,) arrays of element indices (e.g. physical groups of surfaces).
+    cell_data: named per-element arrays (n_elements, ...) read with the mesh, e.g. a fibre
+        direction (n_elements, 3).
     Raises ValueError naming the element, node or set at fault.
     """
 
@@ -28,6 +30,7 @@ class Mesh:
     triangles: np.ndarray
     node_sets: dict[str, np.ndarray] = field(default_factory=dict)
     element_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    cell_data: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self):
         nodes = np.asarray(self.nodes, dtype=float)
@@ -408,6 +411,18 @@ def _mesh_from_meshio(data) -> Mesh:
             raise ValueError(f"point set {name!r} refers to a point outside 0..{n_points - 1}")
         node_parts.setdefault(name, []).append(points_in_set)
 
+    # per-element data of the surface blocks (a split quad gives both triangles its value)
+    cell_data = {}
+    for name, per_block in data.cell_data.items():
+        if name.startswith("gmsh:") or len(per_block) != len(blocks):
+            continue
+        parts = []
+        for b in sorted(first_element):
+            values = np.asarray(per_block[b], dtype=float)
+            parts.append(np.repeat(values, _SURFACE_CELLS[blocks[b][0]], axis=0))
+        if parts and all(p.shape[1:] == parts[0].shape[1:] for p in parts):
+            cell_data[name] = np.concatenate(parts)
+
     # checks in the file's numbering, so that the messages point into the file
     checked = Mesh(points, triangles)
     bad = _zero_area_element(checked.nodes, triangles)
@@ -428,4 +443,4 @@ def _mesh_from_meshio(data) -> Mesh:
     element_sets = {
         name: _sorted_unique(np.concatenate(parts)) for name, parts in element_parts.items()
     }
-    return Mesh(checked.nodes[used], new_number[triangles], node_sets, element_sets)
+    return Mesh(checked.nodes[used], new_number[triangles], node_sets, element_sets, cell_data)

@@ -24,7 +24,7 @@ class Progress:
         self.count += 1
         if self.quiet:
             return
-        taut, wrinkled, slack = step.states
+        _, wrinkled, slack = step.states
         text = (
             f"step {self.count:3d}  load factor {step.load_factor:7.4f}  "
             f"iterations {step.iterations:3d}  residual {step.residual:9.2e}  "
