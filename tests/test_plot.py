@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_output import sheared_square
 
 import wrinkle
 from wrinkle.materials import StVenantKirchhoff
@@ -18,15 +19,6 @@ pytest.importorskip("meshio")
 pytest.importorskip("matplotlib")
 
 PICTURES = ["state.png", "principal_stress.png", "load_displacement.png"]
-
-
-def sheared_square() -> wrinkle.Model:
-    """Unit square, 4 x 4 squares; bottom clamped, top moved (0.2, 0.02, 0): all wrinkled."""
-    mesh = wrinkle.rectangle(1.0, 1.0, 4, 4)
-    model = wrinkle.Model(mesh, StVenantKirchhoff.isotropic(E=1.0, nu=0.3, thickness=0.1))
-    model.fix(mesh.node_sets["bottom"], label="bottom")
-    model.prescribe(mesh.node_sets["top"], (0.2, 0.02, 0.0), label="top")
-    return model
 
 
 @pytest.fixture(scope="module")

@@ -56,6 +56,19 @@ class Support:
     dofs: np.ndarray
 
 
+def _indices(selection, count: int, what: str) -> np.ndarray:
+    """Indices (k,) int64 of a selection of nodes or elements given as indices or a mask."""
+    selection = np.atleast_1d(np.asarray(selection))
+    if selection.dtype == bool:
+        selection = np.flatnonzero(selection)
+    if selection.size == 0:
+        raise ValueError(f"no {what}s selected")
+    bad = (selection < 0) | (selection >= count)
+    if np.any(bad):
+        raise ValueError(f"{what} {selection[bad][0]} does not exist (mesh has {count})")
+    return selection.astype(np.int64)
+
+
 class Model:
     """A membrane model: mesh, materials with wrinkling, supports and loads.
 
@@ -95,17 +108,7 @@ class Model:
     def _element_indices(self, elements) -> np.ndarray:
         if elements is None:
             return np.arange(self.mesh.n_elements)
-        elements = np.atleast_1d(np.asarray(elements))
-        if elements.dtype == bool:
-            elements = np.flatnonzero(elements)
-        if elements.size == 0:
-            raise ValueError("no elements selected")
-        bad = (elements < 0) | (elements >= self.mesh.n_elements)
-        if np.any(bad):
-            raise ValueError(
-                f"element {elements[bad][0]} does not exist (mesh has {self.mesh.n_elements})"
-            )
-        return elements.astype(np.int64)
+        return _indices(elements, self.mesh.n_elements, "element")
 
     def assign_material(
         self,
@@ -180,15 +183,7 @@ class Model:
 
     # -- supports and loads -------------------------------------------------------------
     def _node_indices(self, nodes) -> np.ndarray:
-        nodes = np.atleast_1d(np.asarray(nodes))
-        if nodes.dtype == bool:
-            nodes = np.flatnonzero(nodes)
-        if nodes.size == 0:
-            raise ValueError("no nodes selected")
-        bad = (nodes < 0) | (nodes >= self.mesh.n_nodes)
-        if np.any(bad):
-            raise ValueError(f"node {nodes[bad][0]} does not exist (mesh has {self.mesh.n_nodes})")
-        return nodes.astype(np.int64)
+        return _indices(nodes, self.mesh.n_nodes, "node")
 
     def _add_support(self, nodes: np.ndarray, dofs: np.ndarray, label: str | None) -> None:
         label = label or f"support {len(self.supports) + 1}"
@@ -291,10 +286,14 @@ class Model:
         """Element forces, stiffness and states at displacements u, (n_dofs,)."""
         x = element_coordinates(self.mesh.nodes + u.reshape(-1, 3), self.mesh.triangles)
         groups = self.groups
-        try:
-            results = [elements.evaluate(x[index], stiffness=stiffness) for index, elements in groups]
-        except WrinklingError as error:
-            raise EvaluationFailure(str(error)) from error
+        results = []
+        for index, elements in groups:
+            try:
+                results.append(
+                    elements.evaluate(x if len(groups) == 1 else x[index], stiffness=stiffness)
+                )
+            except WrinklingError as error:  # group rows -> mesh elements
+                raise EvaluationFailure(str(WrinklingError(index[error.elements]))) from error
         if len(results) == 1:
             return results[0]
         return _concatenate_results(results, self._inverse_order)
