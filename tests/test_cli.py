@@ -174,17 +174,20 @@ def test_failed_solve_exits_1_and_keeps_converged_steps(tmp_path, capsys):
 
 
 def test_python_api_matches_case(tmp_path):
-    """read_case gives the same model as writing it in Python; Results.save writes the files."""
+    """read_case gives the same model as writing it in Python; its [solver] table sets the
+    defaults of solve(); Results.save writes the files."""
     import wrinkle
 
     case = tmp_path / "case.toml"
-    case.write_text(BASE_CASE)
-    results = wrinkle.read_case(case).solve()
+    case.write_text(BASE_CASE + "\n[solver]\nsteps = 3\n")
+    from_case = wrinkle.read_case(case)
+    results = from_case.solve()
+    assert len(results.steps) == 3 and from_case.source == case
     mesh = wrinkle.rectangle(1.0, 1.0, 2, 2)
     model = wrinkle.Model(mesh, StVenantKirchhoff.isotropic(E=1000.0, nu=0.3, thickness=0.01))
     model.fix(mesh.node_sets["bottom"])
     model.prescribe(mesh.node_sets["top"], (0.05, 0.02, 0.0))
-    direct = model.solve()
+    direct = model.solve(steps=3)
     np.testing.assert_allclose(results.final.displacement, direct.final.displacement, atol=1e-12)
     direct.save(tmp_path / "out")
     assert (tmp_path / "out" / "results.pvd").exists()
@@ -250,7 +253,7 @@ def test_fibre_directions_per_region_or_from_cell_data(tmp_path, source):
                      f'[material]\ndirection = "fibre"\n{STRIP_MATERIAL}')
     case = tmp_path / "case.toml"
     case.write_text(materials + STRIP_SUPPORTS)
-    model = wrinkle.read_case(case).model
+    model = wrinkle.read_case(case)
     u = model.solve(tolerance=1e-12).final.displacement.reshape(-1, 3)
     middle = np.isclose(model.mesh.nodes[:, 0], 1.0)
     l1 = brentq(lambda a: 5 * a * (a**2 - 1) - (2.01 - a) * ((2.01 - a) ** 2 - 1), 1.0, 1.01)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -23,21 +22,6 @@ from wrinkle.solvers import SOLVERS
 
 class CaseError(ValueError):
     """Bad input in a case file; the message names the file and the key."""
-
-
-@dataclass
-class Case:
-    """A case read from a file: the model plus how to solve and report it."""
-
-    path: Path
-    model: Model
-    solver: dict = field(default_factory=dict)  # keyword arguments of Model.solve
-    probes: dict[str, np.ndarray] = field(default_factory=dict)
-    units: dict[str, str] = field(default_factory=dict)
-
-    def solve(self, on_step=None):
-        """Solve the model with the case's solver settings."""
-        return self.model.solve(**self.solver, on_step=on_step)
 
 
 MATERIAL_MODELS = {
@@ -127,10 +111,13 @@ class _Reader:
         return mesh.element_sets[region]
 
 
-def read_case(path: str | Path) -> Case:
-    """Read a TOML case file into a ``Case`` (model, solver settings, probes, units).
+def read_case(path: str | Path) -> Model:
+    """Read a TOML case file into a ``Model``.
 
-    Raises CaseError (a ValueError) naming the file and key for any bad input.
+    The case's [solver] table becomes ``model.solver_settings`` (the defaults of
+    ``model.solve()``), its probes ``model.probes``, its units ``model.units``, and
+    ``model.source`` is the file. Raises CaseError (a ValueError) naming the file and key for
+    any bad input.
     """
     path = Path(path)
     reader = _Reader(path)
@@ -167,7 +154,11 @@ def read_case(path: str | Path) -> Case:
         model.check_supports()
     except ValueError as error:
         reader.fail("[[support]]", str(error))
-    return Case(path, model, solver, probes, units)
+    model.solver_settings.update(solver)
+    model.probes = probes
+    model.units = units
+    model.source = path
+    return model
 
 
 def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:

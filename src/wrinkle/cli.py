@@ -32,8 +32,8 @@ def _run(args: argparse.Namespace) -> int:
     from wrinkle.output import ResultWriter
     from wrinkle.progress import Progress
 
-    case = read_case(args.case)
-    writer = ResultWriter(args.out, case.model, probes=case.probes, units=case.units,
+    model = read_case(args.case)
+    writer = ResultWriter(args.out, model, probes=model.probes, units=model.units,
                           case=args.case)
     progress = Progress(quiet=args.quiet)
 
@@ -42,7 +42,7 @@ def _run(args: argparse.Namespace) -> int:
         progress.step(step)
 
     try:
-        case.solve(on_step=on_step)
+        model.solve(on_step=on_step)
     except ConvergenceError as error:
         progress.close()
         writer.finish(False, f"not converged: {error}")

@@ -36,6 +36,8 @@ from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, Wrinkling, WrinklingError
 logger = logging.getLogger("wrinkle")
 
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
+SOLVE_DEFAULTS = {"steps": 1, "method": "newton", "tolerance": 1e-6, "max_iterations": None,
+                  "min_step": 1e-4}
 
 
 def _component_indices(components: str | Sequence[str]) -> list[int]:
@@ -101,6 +103,11 @@ class Model:
         self.supports: list[Support] = []
         self._pressure = np.zeros(n)  # follower pressure at full load, per element
         self._edge_follower: list[tuple] = []  # (node triples, q, triangle, local dofs)
+        # what a case file adds: defaults of solve(), probes and units for the output
+        self.solver_settings: dict = {}
+        self.probes: dict[str, np.ndarray] = {}
+        self.units: dict[str, str] = {}
+        self.source = None
         if material is not None:
             self.assign_material(material)
 
@@ -373,26 +380,35 @@ class Model:
     # -- solution -----------------------------------------------------------------------
     def solve(
         self,
-        steps: int = 1,
-        method: str = "newton",
-        tolerance: float = 1e-6,
+        steps: int | None = None,
+        method: str | None = None,
+        tolerance: float | None = None,
         max_iterations: int | None = None,
-        min_step: float = 1e-4,
+        min_step: float | None = None,
         u0: np.ndarray | None = None,
         on_step=None,
     ) -> Results:
         """Proportional stepping of loads and prescribed displacements from 0 to 1.
 
-        ``steps`` equal increments of the load factor are the aim; a step that fails is cut in
-        half (down to ``min_step``) and the increment grows again after easy steps (at most
-        back to 1/steps). ``on_step(step_result)`` is called after each converged step.
-        Raises ConvergenceError, with the converged steps in its ``results`` attribute, if a
-        step cannot be solved. ``max_iterations`` None takes the method's default.
+        ``steps`` equal increments of the load factor are the aim (default 1); a step that
+        fails is cut in half (down to ``min_step``, default 1e-4) and the increment grows again
+        after easy steps (at most back to 1/steps). ``method`` "newton" (default) or
+        "restricted-step"; ``tolerance`` on the residual force relative to the applied and
+        reaction forces (default 1e-6); ``max_iterations`` per step (default: the method's).
+        Arguments left None take ``solver_settings`` (from a case file), then the defaults.
+        ``on_step(step_result)`` is called after each converged step. Raises
+        ConvergenceError, with the converged steps in its ``results`` attribute, if a step
+        cannot be solved.
         """
+        given = {"steps": steps, "method": method, "tolerance": tolerance,
+                 "max_iterations": max_iterations, "min_step": min_step}
+        settings = {**SOLVE_DEFAULTS, **self.solver_settings,
+                    **{k: v for k, v in given.items() if v is not None}}
+        steps, min_step = settings["steps"], settings["min_step"]
         if int(steps) < 1:
             raise ValueError(f"steps must be >= 1, got {steps}")
         self.check_supports()
-        solver = make_solver(method, tolerance, max_iterations)
+        solver = make_solver(settings["method"], settings["tolerance"], settings["max_iterations"])
         u = np.zeros(self.n_dofs) if u0 is None else np.array(u0, dtype=float)
         results = Results(self)
         target = 1.0 / steps
@@ -537,10 +553,13 @@ class Results:
         return step
 
     def save(self, directory, probes=None, units=None) -> None:
-        """Write every step (ParaView files, summary.json, history.csv) into ``directory``."""
+        """Write every step (ParaView files, summary.json, history.csv) into ``directory``;
+        probes and units default to the model's (from its case file)."""
         from wrinkle.output import save_results
 
-        save_results(self, directory, probes=probes, units=units)
+        model = self.model
+        save_results(self, directory, probes=model.probes if probes is None else probes,
+                     units=model.units if units is None else units, case=model.source)
 
     @property
     def final(self) -> StepResult:
