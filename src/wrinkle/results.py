@@ -50,7 +50,6 @@ class PlaneQuantities:
 
 def plane_quantities(C: np.ndarray, response: WrinklingResponse) -> PlaneQuantities:
     """Directions, wrinkling strain and principal stresses from C (n, 2, 2) and the response."""
-    n = C.shape[0]
     state = response.state
     N = response.stress
     phi = response.wrinkle_angle
@@ -73,7 +72,6 @@ def plane_quantities(C: np.ndarray, response: WrinklingResponse) -> PlaneQuantit
     root = np.sqrt(np.maximum(half_trace**2 - det, 0.0))
     area_stretch = np.sqrt(C[:, 0, 0] * C[:, 1, 1] - C[:, 0, 1] ** 2)
     principal = np.stack([half_trace - root, half_trace + root], axis=-1) / area_stretch[:, None]
-    assert principal.shape == (n, 2)
     return PlaneQuantities(tension, wrinkle, beta, principal)
 
 
