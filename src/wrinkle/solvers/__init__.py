@@ -9,7 +9,7 @@ SOLVERS = {"newton": RegularisedNewton, "restricted-step": RestrictedStep}
 
 def make_solver(method: str = "newton", tolerance: float = 1e-6, max_iterations: int | None = None):
     """Solver by name: "newton" (default) or "restricted-step"; max_iterations None takes the
-    method's default (50 for Newton, 300 for the slower restricted step)."""
+    method's default (100 for Newton, 300 for the slower restricted step)."""
     try:
         cls = SOLVERS[method]
     except KeyError:

@@ -23,7 +23,7 @@ class RegularisedNewton(RegularisedSolver):
     """Trust-region / Levenberg-regularised Newton on the potential energy."""
 
     method = "newton"
-    default_max_iterations = 50
+    default_max_iterations = 100
 
     def initial_theta(self, K, free) -> float:
         self._scale = stiffness_scale(K, free)
