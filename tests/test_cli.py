@@ -132,7 +132,10 @@ BAD_INPUTS = [
      "duplicate"),
     ("rigid-body motion", lambda c: c.replace('fix = ["x", "y", "z"]', 'fix = ["x", "y"]')
      .replace("displacement = [0.05, 0.02, 0.0]", 'displacement = [0.05, 0.02, "free"]'),
-     "no node is supported in z"),
+     "do not prevent translation in z"),
+    ("rotation unrestrained", lambda c: c.replace('nodes = "y == 0"', 'nodes = "x == 0 and y == 0"')
+     .replace("displacement = [0.05, 0.02, 0.0]", 'displacement = ["free", 0.02, "free"]'),
+     "and rotation about y"),
     ("selector matches nothing", lambda c: c.replace('nodes = "y == 0"', 'nodes = "y == 5"'),
      "matches no node"),
     ("bad selector", lambda c: c.replace('nodes = "y == 0"', 'nodes = "y === 0"'),

@@ -370,12 +370,35 @@ class Model:
         return StepProblem(self, load_factor, prescribed)
 
     def check_supports(self) -> None:
-        """Raise ValueError if a displacement component is supported nowhere."""
-        for c, name in enumerate("xyz"):
-            if not np.any(self.constrained[c::3]):
-                raise ValueError(
-                    f"no node is supported in {name}: rigid-body motion is unrestrained"
-                )
+        """Raise ValueError if the supports leave a rigid-body motion free: the six motions
+        (three translations, three rotations about the centroid) must have no combination
+        that moves no supported component."""
+        X = self.mesh.nodes - self.mesh.nodes.mean(axis=0)
+        modes = np.zeros((self.mesh.n_nodes, 3, 6))
+        modes[:, :, :3] = np.eye(3)
+        for axis in range(3):
+            modes[:, :, 3 + axis] = np.cross(np.eye(3)[axis], X)  # rotation about the axis
+        held = modes.reshape(-1, 6)[self.constrained]
+        size = np.abs(X).max() if X.size else 1.0
+        held[:, 3:] /= max(size, 1e-300)
+        if held.shape[0] >= 6:
+            _, singular, vt = np.linalg.svd(held, full_matrices=False)
+            if singular[-1] > 1e-8 * singular[0]:
+                return
+            free = vt[-1]
+        else:
+            free = np.linalg.svd(held if held.size else np.zeros((1, 6)))[2][-1]
+        names = np.array(["translation in x", "translation in y", "translation in z",
+                          "rotation about x", "rotation about y", "rotation about z"])
+        scale = np.abs(held).max() if held.size else 1.0
+        pure = np.all(np.abs(held) <= 1e-12 * scale, axis=0)  # modes no support touches
+        if np.any(pure):
+            motion = ", ".join(names[pure])
+        else:
+            motion = "a motion combining " + " and ".join(names[np.abs(free) > 0.3 * np.abs(free).max()])
+        raise ValueError(
+            f"rigid-body motion is unrestrained: the supports do not prevent {motion}"
+        )
 
     # -- solution -----------------------------------------------------------------------
     def solve(
