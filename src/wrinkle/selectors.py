@@ -174,22 +174,20 @@ class _Parser:
         return _Logic(operator, tuple(operands))
 
     def condition(self):
-        columns = [self.token.column]
-        operands = [self.and_term()]
-        while self.at("or"):
-            self.take()
-            columns.append(self.token.column)
-            operands.append(self.and_term())
-        return operands[0] if len(operands) == 1 else self.logic("or", operands, columns)
+        return self.chain("or", self.and_term)
 
     def and_term(self):
+        return self.chain("and", self.not_term)
+
+    def chain(self, keyword: str, operand):
+        """operand (keyword operand)*: a logic node, or the single operand."""
         columns = [self.token.column]
-        operands = [self.not_term()]
-        while self.at("and"):
+        operands = [operand()]
+        while self.at(keyword):
             self.take()
             columns.append(self.token.column)
-            operands.append(self.not_term())
-        return operands[0] if len(operands) == 1 else self.logic("and", operands, columns)
+            operands.append(operand())
+        return operands[0] if len(operands) == 1 else self.logic(keyword, operands, columns)
 
     def not_term(self):
         if self.at("not"):
