@@ -111,24 +111,46 @@ class _Reader:
         return mesh.element_sets[region]
 
 
-def read_case(path: str | Path) -> Model:
+def read_case_data(path: str | Path) -> dict:
+    """The tables of the TOML case file ``path`` as a dict; CaseError if unreadable."""
+    path = Path(path)
+    if not path.is_file():
+        raise CaseError(f"{path}: case file not found")
+    try:
+        return tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise CaseError(f"{path}: not valid TOML: {error}") from None
+
+
+def merged(data: dict, overrides: dict) -> dict:
+    """A copy of the nested tables ``data`` with the keys of ``overrides`` replaced (tables
+    merged key by key, anything else replaced whole)."""
+    out = dict(data)
+    for key, value in overrides.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = merged(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+def read_case(path: str | Path, overrides: dict | None = None) -> Model:
     """Read a TOML case file into a ``Model``.
 
     The case's [solver] table becomes ``model.solver_settings`` (the defaults of
     ``model.solve()``), its probes ``model.probes``, its units ``model.units``, and
-    ``model.source`` is the file. Raises CaseError (a ValueError) naming the file and key for
-    any bad input.
+    ``model.source`` is the file. ``overrides``: nested tables merged over the file's (e.g.
+    ``{"mesh": {"rectangle": {"nx": 8}}}`` for a mesh-convergence study). A ``[verification]``
+    table is left to the verification gallery (``model.verification``). Raises CaseError (a
+    ValueError) naming the file and key for any bad input.
     """
     path = Path(path)
     reader = _Reader(path)
-    if not path.is_file():
-        raise CaseError(f"{path}: case file not found")
-    try:
-        data = tomllib.loads(path.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise CaseError(f"{path}: not valid TOML: {error}") from None
+    data = read_case_data(path)
+    if overrides:
+        data = merged(data, overrides)
     reader.keys(data, "top level", {"mesh", "material"},
-                {"support", "load", "probe", "solver", "title"})
+                {"support", "load", "probe", "solver", "title", "verification"})
 
     mesh, units = _read_mesh(reader, data["mesh"], path.parent)
     model = Model(mesh)
@@ -158,6 +180,7 @@ def read_case(path: str | Path) -> Model:
     model.probes = probes
     model.units = units
     model.source = path
+    model.verification = data.get("verification", {})
     return model
 
 

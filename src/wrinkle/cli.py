@@ -1,6 +1,8 @@
-"""Command line: ``wrinkle run CASE --out DIR``, ``wrinkle plot DIR``, ``wrinkle demo``.
+"""Command line: ``wrinkle run CASE --out DIR``, ``wrinkle plot DIR``, ``wrinkle demo``,
+``wrinkle verify --out DIR [--quick]``.
 
-Exit status: 0 done; 1 a load step did not converge (every converged step is on disk);
+Exit status: 0 done; 1 a load step did not converge (every converged step is on disk), or a
+verification benchmark failed;
 2 bad input (a one-line message naming the file, key, node or element).
 """
 
@@ -68,6 +70,29 @@ def _plot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _verify(args: argparse.Namespace) -> int:
+    from wrinkle.verification.gallery import run_gallery
+
+    def report(entry):
+        if args.quiet:
+            return
+        outcome = entry.outcome
+        if outcome is None:
+            print(f"{entry.benchmark.name:>18}: FAILED to run ({entry.error})", flush=True)
+            return
+        failed = [c.quantity for c in outcome.checks if not c.passed]
+        verdict = "pass" if entry.passed else f"FAIL ({'; '.join(failed) or 'no checks'})"
+        print(f"{entry.benchmark.name:>18}: {verdict}, {len(outcome.checks)} checks, "
+              f"{entry.seconds:.1f} s", flush=True)
+
+    entries = run_gallery(Path(args.cases), Path(args.out), quick=args.quick, only=args.only,
+                          on_entry=report)
+    passed = sum(entry.passed for entry in entries)
+    if not args.quiet:
+        print(f"{passed} of {len(entries)} benchmarks pass; wrote {Path(args.out) / 'report.md'}")
+    return 0 if passed == len(entries) else 1
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="wrinkle", description="Finite-element analysis of wrinkling membranes."
@@ -88,6 +113,17 @@ def main(argv: list[str] | None = None) -> int:
     plot = sub.add_parser("plot", help="pictures of the results in a directory")
     plot.add_argument("directory", help="directory written by wrinkle run")
     plot.set_defaults(run=_plot)
+    verify = sub.add_parser(
+        "verify", help="run the verification gallery and write DIR/report.md"
+    )
+    verify.add_argument("--out", default="verification", help="output directory")
+    verify.add_argument("--quick", action="store_true", help="coarse meshes (minutes, not tens)")
+    verify.add_argument("--cases", default="examples/verification",
+                        help="folder of the benchmark case files")
+    verify.add_argument("--only", action="append", default=[], metavar="NAME",
+                        help="run only this benchmark (may be repeated)")
+    verify.add_argument("-q", "--quiet", action="store_true", help="no per-benchmark lines")
+    verify.set_defaults(run=_verify)
     args = parser.parse_args(argv)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING, format="%(message)s"

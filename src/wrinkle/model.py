@@ -108,6 +108,7 @@ class Model:
         self.probes: dict[str, np.ndarray] = {}
         self.units: dict[str, str] = {}
         self.source = None
+        self.verification: dict = {}  # a case file's [verification] table
         if material is not None:
             self.assign_material(material)
 

@@ -318,3 +318,39 @@ def _plot_load_displacement(plt, summary: dict, history_path: Path, length_unit:
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def plot_state_map(model, u: np.ndarray, path: Path, title: str, length_unit: str = "") -> Path:
+    """``state.png``'s picture for a model in memory: taut / wrinkled / slack elements of
+    ``model`` at displacements u (n_dofs,) with tension lines, written to ``path``."""
+    from wrinkle.results import element_report
+
+    report = element_report(model, u)
+    x = model.mesh.nodes + np.asarray(u).reshape(-1, 3)
+    view = _View(x, model.mesh.triangles, length_unit)
+    cell = {"state": report.state, "tension_direction": report.tension_direction}
+    return _plot_states(_pyplot(), view, cell, f"{title}\ndeformed membrane {view.name}",
+                        Path(path))
+
+
+def plot_convergence(studies, path: Path, title: str) -> Path:
+    """Log-log errors against mesh size h for each ``Convergence`` in ``studies``, with a
+    slope triangle of the expected order; written to ``path``."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.0, 4.5), layout="constrained")
+    for study in studies:
+        h = np.asarray(study.sizes, float)
+        e = np.abs(np.asarray(study.errors, float))
+        ax.loglog(h, e, "o-", label=f"{study.quantity} (order {study.observed_order:.2f})")
+        guide = e[-1] * (h / h[-1]) ** study.expected_order
+        ax.loglog(h, guide, "--", color="0.6", lw=1.0)
+    if studies:
+        ax.plot([], [], "--", color="0.6", label="expected order")
+    ax.set_xlabel("mesh size h")
+    ax.set_ylabel("error")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title, fontsize=10)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return Path(path)
