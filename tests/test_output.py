@@ -296,6 +296,27 @@ def test_supports_with_one_label_are_reported_together(tmp_path):
     )
 
 
+def test_a_support_reports_only_the_components_it_holds(tmp_path):
+    """A support holding z of every node carries no in-plane reaction, even where other
+    supports hold x or y of the same nodes; the summary agrees with Model.support_reactions
+    and with equilibrium (the x reactions balance the applied unit traction)."""
+    mesh = wrinkle.rectangle(1.0, 1.0, 2, 2)
+    model = wrinkle.Model(mesh, StVenantKirchhoff.isotropic(E=1.0, nu=0.3, thickness=0.1))
+    model.fix(mesh.node_sets["left"], "x", label="left x")
+    model.fix(0, "y", label="corner y")
+    model.fix(np.arange(mesh.n_nodes), "z", label="plane")
+    model.add_edge_load(mesh.node_sets["right"], traction=(1.0, 0.0, 0.0))
+    step = model.solve(tolerance=1e-10).final
+    writer = ResultWriter(tmp_path, model)
+    writer.write_step(step)
+    reported = read_summary(tmp_path)["steps"][0]["reactions"]
+    expected = model.support_reactions(step.reactions)
+    for label in ("left x", "corner y", "plane"):
+        np.testing.assert_allclose(reported[label], expected[label], atol=1e-12)
+    np.testing.assert_allclose(reported["left x"], [-1.0, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(reported["plane"], [0.0, 0.0, 0.0], atol=1e-12)
+
+
 @pytest.mark.parametrize(
     "probe, message",
     [(np.array([], dtype=int), "non-empty"), (np.array([0, 25]), "0..24"), ([0.5], "non-empty")],

@@ -102,8 +102,9 @@ class ResultWriter:
     probes: {name: node indices (k,)} whose mean displacement goes into history.csv;
     units: e.g. {"length": "m", "force": "N"}, recorded in summary.json; case: the case file
     the model came from, recorded in summary.json. Supports are ``model.supports`` (objects
-    with ``label`` and ``nodes``), read when the writer is made; supports with the same label
-    are reported as one (the reaction summed over the union of their nodes). Creates
+    with ``label`` and ``dofs``), read when the writer is made; each one's reaction sums only
+    the components it holds, and supports with the same label are reported as one (summed
+    over the union of their components). Creates
     ``out_dir``; removes step_NNNN.vtu files of an earlier run there. Raises ValueError for a
     probe with no nodes or with nodes outside the mesh.
     """
@@ -130,11 +131,11 @@ class ResultWriter:
             if np.any((nodes < 0) | (nodes >= n_nodes)):
                 raise ValueError(f"probe {name!r}: node indices must lie in 0..{n_nodes - 1}")
             self.probes[str(name)] = nodes.astype(np.int64)
-        self.supports: dict[str, np.ndarray] = {}  # label -> nodes; a repeated label merges
+        self.supports: dict[str, np.ndarray] = {}  # label -> dofs; a repeated label merges
         for support in getattr(model, "supports", []):
             label = str(support.label)
-            nodes = np.asarray(support.nodes, dtype=np.int64).ravel()
-            self.supports[label] = np.union1d(self.supports.get(label, nodes), nodes)
+            dofs = np.asarray(support.dofs, dtype=np.int64).ravel()
+            self.supports[label] = np.union1d(self.supports.get(label, dofs), dofs)
         self.units = dict(units) if units else None
         self.case = str(case) if case is not None else None
         self.steps: list[dict] = []
@@ -156,9 +157,10 @@ class ResultWriter:
         path = self.out_dir / name
         self._write_vtu(path, step)
         u = np.asarray(step.displacement, dtype=float).reshape(-1, 3)
-        reactions = np.asarray(step.reactions, dtype=float).reshape(-1, 3)
+        reactions = np.asarray(step.reactions, dtype=float)
         support_forces = {
-            label: reactions[nodes].sum(axis=0) for label, nodes in self.supports.items()
+            label: np.bincount(dofs % 3, reactions[dofs], minlength=3)
+            for label, dofs in self.supports.items()
         }
         probe_means = {name: u[nodes].mean(axis=0) for name, nodes in self.probes.items()}
         states = [int(s) for s in step.states]
