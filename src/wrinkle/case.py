@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
-from wrinkle.mesh import Mesh, annulus, disk, read_mesh, rectangle
+from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
 from wrinkle.selectors import evaluate_expression, select_nodes
 from wrinkle.solvers import SOLVERS
@@ -33,6 +33,8 @@ GENERATORS = {
     "rectangle": (rectangle, ("width", "height", "nx", "ny"), ()),
     "disk": (disk, ("outer_radius", "n_radial", "n_circumferential"), ()),
     "annulus": (annulus, ("inner_radius", "outer_radius", "n_radial", "n_circumferential"), ()),
+    "sphere": (sphere, ("radius", "n"), ()),
+    "cylinder": (cylinder, ("radius", "length", "n_circumferential", "n_axial", "n_cap"), ()),
 }
 LOAD_KINDS = {
     "pressure": ({"value"}, {"region"}),

@@ -254,6 +254,111 @@ def disk(radius: float, n_radial: int, n_circumferential: int) -> Mesh:
     return Mesh(nodes, triangles, sets)
 
 
+def sphere(radius: float, n: int) -> Mesh:
+    """One octant x, y, z >= 0 of the sphere |X| = radius: a subdivided octahedron face.
+
+    The face with corners radius e_x, radius e_y, radius e_z is cut into n**2 triangles by
+    n - 1 lines parallel to each side; its node with the integer barycentric coordinates
+    (i, j, k), i + j + k = n, goes onto the sphere at
+
+        X = radius d / |d|,    d = (sin(pi i / 2n), sin(pi j / 2n), sin(pi k / 2n)),
+
+    so that every node lies on the sphere, the nodes of the three edges (i = 0: x = 0;
+    j = 0: y = 0; k = 0: z = 0, exactly) are equally spaced in angle, and the element areas
+    differ by less than a factor 1.8 (plain central projection of the flat face, d = (i, j,
+    k), gives a factor 5). Nodes are numbered row by row, k = 0 .. n, and along each row
+    j = 0 .. n - k: node (j, k) is k (2n + 3 - k) / 2 + j. Triangles are counter-clockwise
+    seen from outside (normal (X2 - X1) x (X3 - X1) pointing away from the centre), so a
+    positive follower pressure inflates the octant. Node sets "yz-plane", "zx-plane" and
+    "xy-plane" name the three edges x = 0, y = 0, z = 0. (n + 1)(n + 2)/2 nodes, n**2
+    triangles; the faceted area tends to pi radius**2 / 2 with an error of order (1/n)**2.
+    """
+    radius = _check_length("sphere", "radius", radius)
+    n = _check_count("sphere", "n", n, 1)
+    k = np.repeat(np.arange(n + 1), np.arange(n + 1, 0, -1))
+    row_start = k * (2 * n + 3 - k) // 2
+    j = np.arange(k.size) - row_start
+    i = n - j - k
+    direction = np.sin(0.5 * np.pi * np.column_stack([i, j, k]) / n)
+    nodes = radius * direction / np.linalg.norm(direction, axis=1)[:, None]
+
+    def node(j, k):
+        return k * (2 * n + 3 - k) // 2 + j
+
+    up = i > 0  # the triangle (j, k), (j + 1, k), (j, k + 1) above each node off side i = 0
+    down = i > 1  # the triangle (j + 1, k), (j + 1, k + 1), (j, k + 1)
+    triangles = np.concatenate([
+        np.column_stack([node(j[up], k[up]), node(j[up] + 1, k[up]), node(j[up], k[up] + 1)]),
+        np.column_stack([node(j[down] + 1, k[down]), node(j[down] + 1, k[down] + 1),
+                         node(j[down], k[down] + 1)]),
+    ])
+    sets = {"yz-plane": np.flatnonzero(i == 0), "zx-plane": np.flatnonzero(j == 0),
+            "xy-plane": np.flatnonzero(k == 0)}
+    return Mesh(nodes, triangles, sets)
+
+
+def cylinder(
+    radius: float, length: float, n_circumferential: int, n_axial: int, n_cap: int
+) -> Mesh:
+    """Closed circular tube along x: the wall 0 <= x <= length at distance ``radius`` from the
+    x axis, closed by two flat circular end caps, x = 0 ("root") and x = length ("tip").
+
+    The wall has n_axial + 1 circles of n_circumferential nodes; wall node (i, j), at
+    x = i length / n_axial and angle theta_j = 2 pi j / n_circumferential from +y towards +z,
+    (x, radius cos theta_j, radius sin theta_j), is numbered i n_circumferential + j; each
+    quadrilateral between two circles is split into two triangles as in ``annulus``. Each cap
+    is a ``disk`` of n_cap rings of elements whose outer circle is the wall's end circle: its
+    centre and then its inner circles k = 1 .. n_cap - 1 (radius k radius / n_cap, nodes at
+    the angles theta_j) follow the wall nodes, the root cap's before the tip cap's. All
+    triangles are counter-clockwise seen from outside (normal (X2 - X1) x (X3 - X1) pointing
+    out of the tube), so a positive follower pressure inflates it.
+
+    Node sets: "root" and "tip" (the wall's end circles), "root_cap" and "tip_cap" (all nodes
+    of a cap, its circle included). Element sets: "wall", "root_cap", "tip_cap". The surface
+    is closed (every edge is shared by exactly two triangles) and encloses the prism on the
+    inscribed polygon, volume n_circumferential / 2 sin(2 pi / n_circumferential)
+    radius**2 length, which tends to pi radius**2 length with an error of order
+    (1 / n_circumferential)**2.
+    """
+    radius = _check_length("cylinder", "radius", radius)
+    length = _check_length("cylinder", "length", length)
+    n_circumferential = _check_count("cylinder", "n_circumferential", n_circumferential, 3)
+    n_axial = _check_count("cylinder", "n_axial", n_axial, 1)
+    n_cap = _check_count("cylinder", "n_cap", n_cap, 1)
+    n = n_circumferential
+    # the wall: an annulus's connectivity with its circles placed along x (the annulus's
+    # counter-clockwise order, mapped onto the tube, faces inwards: two nodes swapped)
+    _, wall = _polar_rings(np.arange(1.0, n_axial + 2.0), n)
+    wall = wall[:, [0, 2, 1]]
+    angle = 2.0 * np.pi * np.arange(n) / n
+    x = np.repeat(length * np.arange(n_axial + 1) / n_axial, n)
+    wall_nodes = np.column_stack([x, radius * np.tile(np.cos(angle), n_axial + 1),
+                                  radius * np.tile(np.sin(angle), n_axial + 1)])
+    n_wall = wall_nodes.shape[0]
+    # a cap: a disk in the (y, z) plane, local node 0 its centre, 1 + (k - 1) n + j on circle k;
+    # counter-clockwise seen from +x (y x z = x), i.e. from outside at the tip
+    ring_nodes, ring_triangles = _polar_rings(radius * np.arange(1, n_cap + 1) / n_cap, n)
+    first = 1 + np.arange(n)
+    fan = np.column_stack([np.zeros(n, dtype=np.int64), first, np.roll(first, -1)])
+    cap_triangles = np.vstack([fan, 1 + ring_triangles])
+    cap_yz = np.vstack([np.zeros((1, 2)), ring_nodes[: (n_cap - 1) * n, :2]])  # inner nodes
+    n_inner = cap_yz.shape[0]
+    nodes, triangles = [wall_nodes], [wall]
+    node_sets = {"root": np.arange(n), "tip": n_axial * n + np.arange(n)}
+    element_sets = {"wall": np.arange(wall.shape[0])}
+    n_elements = wall.shape[0]
+    for name, x_cap, ring, offset in (("root_cap", 0.0, node_sets["root"], n_wall),
+                                      ("tip_cap", length, node_sets["tip"], n_wall + n_inner)):
+        local_to_global = np.concatenate([offset + np.arange(n_inner), ring])
+        cap = local_to_global[cap_triangles]
+        triangles.append(cap[:, [0, 2, 1]] if name == "root_cap" else cap)  # root faces -x
+        nodes.append(np.column_stack([np.full(n_inner, x_cap), cap_yz]))
+        node_sets[name] = local_to_global
+        element_sets[name] = n_elements + np.arange(cap.shape[0])
+        n_elements += cap.shape[0]
+    return Mesh(np.vstack(nodes), np.vstack(triangles), node_sets, element_sets)
+
+
 # -- reading mesh files through meshio ------------------------------------------------------
 
 _SURFACE_CELLS = {"triangle": 1, "quad": 2}  # triangles per cell
