@@ -6,7 +6,7 @@ Numerical Analysis", J. Appl. Mech. 54 (1987) 888-892.
 
 from wrinkle.case import read_case
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
-from wrinkle.mesh import Mesh, annulus, disk, read_mesh, rectangle
+from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model, Results
 from wrinkle.point import material_response
 from wrinkle.solvers import ConvergenceError
@@ -16,5 +16,6 @@ __version__ = "0.1.0"
 
 __all__ = [
     "ConvergenceError", "Mesh", "Model", "NeoHookean", "Results", "StVenantKirchhoff",
-    "Wrinkling", "annulus", "disk", "material_response", "read_case", "read_mesh", "rectangle",
+    "Wrinkling", "annulus", "cylinder", "disk", "material_response", "read_case", "read_mesh",
+    "rectangle", "sphere",
 ]
