@@ -82,6 +82,9 @@ def test_verify_command_exit_status(tmp_path, monkeypatch, capsys):
     assert "good: pass, 1 checks" in capsys.readouterr().out
     assert main(common) == 1
     assert "bad: FAIL (torque)" in capsys.readouterr().out
+    assert main(common + ["--only", "good", "--report", str(tmp_path / "docs" / "v.md")]) == 0
+    assert "![curve](../out/good/curve.png)" in (tmp_path / "docs" / "v.md").read_text()
+    capsys.readouterr()
     assert main(common + ["--only", "nonesuch"]) == 2
     assert "unknown benchmark 'nonesuch'" in capsys.readouterr().err
     (tmp_path / "bad.toml").unlink()

@@ -85,11 +85,12 @@ def _verify(args: argparse.Namespace) -> int:
         print(f"{entry.benchmark.name:>18}: {verdict}, {len(outcome.checks)} checks, "
               f"{entry.seconds:.1f} s", flush=True)
 
+    path = Path(args.report) if args.report else Path(args.out) / "report.md"
     entries = run_gallery(Path(args.cases), Path(args.out), quick=args.quick, only=args.only,
-                          on_entry=report)
+                          on_entry=report, report=path)
     passed = sum(entry.passed for entry in entries)
     if not args.quiet:
-        print(f"{passed} of {len(entries)} benchmarks pass; wrote {Path(args.out) / 'report.md'}")
+        print(f"{passed} of {len(entries)} benchmarks pass; wrote {path}")
     return 0 if passed == len(entries) else 1
 
 
@@ -122,6 +123,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="folder of the benchmark case files")
     verify.add_argument("--only", action="append", default=[], metavar="NAME",
                         help="run only this benchmark (may be repeated)")
+    verify.add_argument("--report", help="where to write the report (default DIR/report.md)")
     verify.add_argument("-q", "--quiet", action="store_true", help="no per-benchmark lines")
     verify.set_defaults(run=_verify)
     args = parser.parse_args(argv)

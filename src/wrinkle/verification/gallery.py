@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 import time
 import traceback
 from collections.abc import Callable, Sequence
@@ -124,10 +125,13 @@ def benchmarks() -> list[Benchmark]:
 
 
 def run_gallery(cases: Path, out: Path, quick: bool = False, only: Sequence[str] = (),
-                on_entry: Callable[[Entry], None] | None = None) -> list[Entry]:
+                on_entry: Callable[[Entry], None] | None = None,
+                report: Path | None = None) -> list[Entry]:
     """Run the benchmarks (those named in ``only``, or all) from the case files in ``cases``,
-    write each one's figures into ``out/<name>/`` and the report ``out/report.md``."""
+    write each one's figures into ``out/<name>/`` and the report into ``report`` (default
+    ``out/report.md``; its figure links are relative to its folder)."""
     cases, out = Path(cases), Path(out)
+    report = Path(report) if report is not None else out / "report.md"
     chosen = benchmarks()
     names = [b.name for b in chosen]
     unknown = sorted(set(only) - set(names))
@@ -156,7 +160,8 @@ def run_gallery(cases: Path, out: Path, quick: bool = False, only: Sequence[str]
         entries.append(entry)
         if on_entry is not None:
             on_entry(entry)
-    write_report(entries, out / "report.md", quick)
+    report.parent.mkdir(parents=True, exist_ok=True)
+    write_report(entries, report, quick)
     return entries
 
 
@@ -218,6 +223,6 @@ def write_report(entries: list[Entry], path: Path, quick: bool) -> None:
             lines += [f"| {h:.4g} | {e:.3e} |" for h, e in zip(study.sizes, study.errors)]
             lines.append("")
         for figure in entry.outcome.figures:
-            relative = Path(figure).resolve().relative_to(path.parent.resolve())
+            relative = Path(os.path.relpath(Path(figure).resolve(), path.parent.resolve()))
             lines += [f"![{relative.stem}]({relative.as_posix()})", ""]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
