@@ -17,7 +17,7 @@ from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
 from wrinkle.selectors import evaluate_expression, select_nodes
-from wrinkle.solvers import SOLVERS
+from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS
 
 
 class CaseError(ValueError):
@@ -42,7 +42,7 @@ LOAD_KINDS = {
     "nodal": ({"nodes", "force"}, set()),
     "gravity": ({"acceleration", "density"}, {"region"}),
 }
-SOLVER_KEYS = {"method", "steps", "tolerance", "max_iterations", "min_step"}
+SOLVER_KEYS = {"method", "steps", "tolerance", "max_iterations", "min_step", "linear_solver"}
 
 
 class _Reader:
@@ -346,6 +346,12 @@ def _read_solver(reader: _Reader, table: dict) -> dict:
         if method not in SOLVERS:
             reader.fail(where, f"unknown method '{method}' (one of {', '.join(SOLVERS)})")
         solver["method"] = method
+    if "linear_solver" in table:
+        name = reader.string(table, "linear_solver", where)
+        if name != "auto" and name not in LINEAR_SOLVERS:
+            reader.fail(where, f"unknown linear_solver '{name}' (one of auto, "
+                               f"{', '.join(LINEAR_SOLVERS)})")
+        solver["linear_solver"] = name
     if "steps" in table:
         solver["steps"] = reader.number(table, "steps", where, integer=True, minimum=1)
     if "tolerance" in table:

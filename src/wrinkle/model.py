@@ -37,7 +37,7 @@ logger = logging.getLogger("wrinkle")
 
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
 SOLVE_DEFAULTS = {"steps": 1, "method": "newton", "tolerance": 1e-6, "max_iterations": None,
-                  "min_step": 1e-4}
+                  "min_step": 1e-4, "linear_solver": "auto"}
 
 
 def _component_indices(components: str | Sequence[str]) -> list[int]:
@@ -411,6 +411,7 @@ class Model:
         min_step: float | None = None,
         u0: np.ndarray | None = None,
         on_step=None,
+        linear_solver: str | None = None,
     ) -> Results:
         """Proportional stepping of loads and prescribed displacements from 0 to 1.
 
@@ -418,21 +419,25 @@ class Model:
         fails is cut in half (down to ``min_step``, default 1e-4) and the increment grows again
         after easy steps (at most back to 1/steps). ``method`` "newton" (default) or
         "restricted-step"; ``tolerance`` on the residual force relative to the applied and
-        reaction forces (default 1e-6); ``max_iterations`` per step (default: the method's).
+        reaction forces (default 1e-6); ``max_iterations`` per step (default: the method's);
+        ``linear_solver`` "auto" (default), "superlu", "pardiso", "cholmod" or "amg"
+        (``wrinkle.solvers.linear``).
         Arguments left None take ``solver_settings`` (from a case file), then the defaults.
         ``on_step(step_result)`` is called after each converged step. Raises
         ConvergenceError, with the converged steps in its ``results`` attribute, if a step
         cannot be solved.
         """
         given = {"steps": steps, "method": method, "tolerance": tolerance,
-                 "max_iterations": max_iterations, "min_step": min_step}
+                 "max_iterations": max_iterations, "min_step": min_step,
+                 "linear_solver": linear_solver}
         settings = {**SOLVE_DEFAULTS, **self.solver_settings,
                     **{k: v for k, v in given.items() if v is not None}}
         steps, min_step = settings["steps"], settings["min_step"]
         if int(steps) < 1:
             raise ValueError(f"steps must be >= 1, got {steps}")
         self.check_supports()
-        solver = make_solver(settings["method"], settings["tolerance"], settings["max_iterations"])
+        solver = make_solver(settings["method"], settings["tolerance"], settings["max_iterations"],
+                             settings["linear_solver"])
         u = np.zeros(self.n_dofs) if u0 is None else np.array(u0, dtype=float)
         results = Results(self)
         target = 1.0 / steps
@@ -544,7 +549,8 @@ class StepProblem:
             data[self._constrained_diagonal] = 1.0
             K = model.pattern.matrix(data)
         return Evaluation(
-            residual, energy, scale, counts, K, model.force_round_off, self.symmetric
+            residual, energy, scale, counts, K, model.force_round_off, self.symmetric,
+            model.pattern.diagonal,
         )
 
 

@@ -8,7 +8,8 @@ from typing import Protocol
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
+
+from wrinkle.solvers.linear import diagonal_positions, make_linear_solver
 
 logger = logging.getLogger("wrinkle.solver")
 
@@ -28,6 +29,8 @@ class Evaluation:
     round_off: residual norm that round-off alone can produce (force); a residual below it
         counts as converged whatever the tolerance.
     symmetric: whether the stiffness is symmetric (no follower loads).
+    diagonal: (n_dofs,) positions of the diagonal entries in stiffness.data, if the problem
+        knows them (its fixed sparsity pattern); found from the matrix otherwise.
     """
 
     residual: np.ndarray
@@ -37,6 +40,7 @@ class Evaluation:
     stiffness: sp.csr_matrix | None = None
     round_off: float = 0.0
     symmetric: bool = True
+    diagonal: np.ndarray | None = None
 
     @property
     def residual_norm(self) -> float:
@@ -102,20 +106,17 @@ def stiffness_scale(K: sp.csr_matrix, free: np.ndarray) -> float:
     return scale if scale > 0.0 else 1.0
 
 
-def shifted(K: sp.csr_matrix, shift: complex, free: np.ndarray) -> sp.csc_matrix:
-    """K + shift I on the free dofs (constrained diagonal stays one), CSC for SuperLU."""
-    return (K + sp.diags(np.where(free, shift, 0.0))).tocsc()
+def shifted(K: sp.csr_matrix, shift: complex, free: np.ndarray,
+            diagonal: np.ndarray | None = None) -> sp.csr_matrix:
+    """K + shift I on the free dofs (the constrained diagonal stays one), on K's own pattern.
 
-
-def factorise(A: sp.csc_matrix):
-    """Sparse LU of a matrix with symmetric structure (SciPy's SuperLU), or None if singular."""
-    try:
-        return spla.splu(
-            A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.1, options={"SymmetricMode": True}
-        )
-    except RuntimeError as error:  # "Factor is exactly singular"
-        logger.debug("factorisation failed: %s", error)
-        return None
+    diagonal: (n_dofs,) positions of the diagonal entries in K.data (computed if None).
+    """
+    if diagonal is None:
+        diagonal = diagonal_positions(K)
+    data = K.data.astype(np.result_type(K.data, shift))
+    data[diagonal[free]] += shift
+    return sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
 
 
 def log_iteration(method: str, iteration: int, evaluation: Evaluation, theta: float) -> None:
@@ -142,7 +143,8 @@ class RegularisedSolver:
     default_max_iterations = 50
     max_rejections = 40
 
-    def __init__(self, tolerance: float = 1e-6, max_iterations: int | None = None):
+    def __init__(self, tolerance: float = 1e-6, max_iterations: int | None = None,
+                 linear_solver: str = "auto"):
         if not tolerance > 0:
             raise ValueError(f"solver tolerance must be > 0, got {tolerance}")
         if max_iterations is None:
@@ -151,6 +153,15 @@ class RegularisedSolver:
             raise ValueError(f"solver max_iterations must be >= 1, got {max_iterations}")
         self.tolerance = tolerance
         self.max_iterations = int(max_iterations)
+        self.linear_solver = linear_solver
+        self.linear = None  # the back-end, made at the first solve (it depends on the size)
+
+    def factorise(self, A: sp.csr_matrix, symmetric: bool):
+        """Solve function of the linear back-end for A (None if A is singular)."""
+        if self.linear is None:
+            self.linear = make_linear_solver(self.linear_solver, A.shape[0])
+        return self.linear.factorise(A, symmetric)
+
 
     # to be defined by subclasses
     def initial_theta(self, K: sp.csr_matrix, free: np.ndarray) -> float: ...

@@ -1,6 +1,7 @@
 """Levenberg-regularised Newton method on the potential energy (the default solver).
 
-Each iteration solves (K + theta I) du = f - f* (METHOD.md section 7) with a sparse LU and
+Each iteration solves (K + theta I) du = f - f* (METHOD.md section 7) with a sparse direct
+solver (``wrinkle.solvers.linear``) and
 accepts the step by the gain ratio of the potential energy Pi(u) = sum_e A0 w_relaxed - f.u
 (- p V for pressure) against its quadratic model, rho = [Pi(u) - Pi(u + du)] / [r.du -
 du.K.du / 2]. Where the decrease is at the level of round-off in Pi (close to convergence), or
@@ -13,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wrinkle.solvers.base import Evaluation, RegularisedSolver, factorise, shifted, stiffness_scale
+from wrinkle.solvers.base import Evaluation, RegularisedSolver, shifted, stiffness_scale
 
 _THETA_FLOOR = 1e-14
 _ROUND_OFF = 1e-12
@@ -34,10 +35,11 @@ class RegularisedNewton(RegularisedSolver):
         quadratic model, or (no potential, or a decrease at round-off) |r|^2 by its
         Gauss-Newton model. From a flat membrane under pressure only the energy model sees the
         benefit of moving out of plane (the tangent has no out-of-plane stiffness there)."""
-        lu = factorise(shifted(ev.stiffness, theta * self._scale, free))
-        if lu is None:
+        solve = self.factorise(shifted(ev.stiffness, theta * self._scale, free, ev.diagonal),
+                               ev.symmetric)
+        if solve is None:
             return None, 0.0
-        step = lu.solve(ev.residual)
+        step = solve(ev.residual)
         if not np.all(np.isfinite(step)):
             return None, 0.0
         r = ev.residual

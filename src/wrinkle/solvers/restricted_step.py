@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wrinkle.solvers.base import Evaluation, RegularisedSolver, factorise, shifted, stiffness_scale
+from wrinkle.solvers.base import Evaluation, RegularisedSolver, shifted, stiffness_scale
 
 _CRITICAL = 1e-8  # relative mu below which theta drops to the floor (Fletcher's nu_c)
 _FLOOR = 1e-12  # relative mu at the floor
@@ -36,13 +36,14 @@ class RestrictedStep(RegularisedSolver):
         K = ev.stiffness
         if ev.symmetric:
             mu = np.sqrt(theta / 2.0)
-            lu = factorise(shifted(K.astype(complex), -1j * mu, free))
-            solve = (lambda rhs: lu.solve(rhs.astype(complex)).real) if lu else None
+            complex_solve = self.factorise(shifted(K, -1j * mu, free, ev.diagonal), True)
+            solve = (lambda rhs: complex_solve(rhs.astype(complex)).real) \
+                if complex_solve else None
             rhs = r
         else:  # follower loads: form 2 K^T K (denser) as the paper does
             normal = (K.T @ K).tocsr()
-            lu = factorise(shifted(normal, theta / 2.0, free))
-            solve = lu.solve if lu else None
+            normal.sort_indices()
+            solve = self.factorise(shifted(normal, theta / 2.0, free), True)
             rhs = K.T @ r
         if solve is None:
             return None, 0.0

@@ -1,0 +1,197 @@
+"""Sparse linear solvers for the regularised iterations: (K + shift I) du = r.
+
+The matrices come from one fixed sparsity pattern (``wrinkle.assembly``): structurally
+symmetric, constrained rows and columns replaced by the identity. Each back-end keeps what does
+not change between iterations (the fill-reducing ordering and symbolic factorisation, the
+positions of the diagonal) and factorises only the values again.
+
+- ``superlu``: SciPy's SuperLU, always available; real or complex; the fallback.
+- ``pardiso``: Intel MKL PARDISO through ``pypardiso`` (extra ``fast``), real matrices, nested
+  dissection ordering, two threads; the ordering is reused while the pattern is unchanged.
+- ``cholmod``: CHOLMOD supernodal Cholesky through ``scikit-sparse``, symmetric positive
+  definite matrices only (an indefinite K + shift I is reported as singular, so the
+  regulariser grows until it is positive definite).
+- ``amg``: conjugate gradients preconditioned by smoothed-aggregation algebraic multigrid
+  (``pyamg``), symmetric positive definite matrices only; an iterative, inexact solve.
+
+``make_linear_solver("auto", n_dofs)`` takes PARDISO for large problems when it is installed,
+SuperLU otherwise.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+logger = logging.getLogger("wrinkle.solver")
+
+Solve = Callable[[np.ndarray], np.ndarray]
+AUTO_PARDISO_DOFS = 20_000  # from benchmarks/linear_solvers.py: PARDISO wins above this size
+
+
+class SuperLU:
+    """SciPy's SuperLU with a symmetric-mode ordering (the pattern is structurally symmetric)."""
+
+    name = "superlu"
+
+    def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
+        """LU of A (real or complex); None if it is exactly singular."""
+        try:
+            lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.1,
+                           options={"SymmetricMode": True})
+        except RuntimeError as error:  # "Factor is exactly singular"
+            logger.debug("factorisation failed: %s", error)
+            return None
+        return lu.solve
+
+
+class _PatternCache:
+    """Remembers the pattern (indptr, indices) whose ordering a back-end has analysed."""
+
+    def __init__(self):
+        self._indptr = self._indices = None
+
+    def same(self, A: sp.csr_matrix) -> bool:
+        if self._indptr is not None and self._indptr.shape == A.indptr.shape \
+                and self._indices.shape == A.indices.shape \
+                and np.array_equal(self._indptr, A.indptr) \
+                and np.array_equal(self._indices, A.indices):
+            return True
+        self._indptr, self._indices = A.indptr.copy(), A.indices.copy()
+        return False
+
+
+class Pardiso:
+    """MKL PARDISO (real, structurally symmetric: matrix type 1); ordering reused."""
+
+    name = "pardiso"
+
+    def __init__(self):
+        import pypardiso
+
+        self._solver = pypardiso.PyPardisoSolver(mtype=1)
+        self._pattern = _PatternCache()
+        self._fallback = SuperLU()
+
+    def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
+        if np.iscomplexobj(A.data):
+            return self._fallback.factorise(A, symmetric)
+        from pypardiso.pardiso_wrapper import PyPardisoError
+
+        A = A if A.has_sorted_indices else A.sorted_indices()
+        solver = self._solver
+        rhs = np.zeros((A.shape[0], 1))
+        try:
+            if not self._pattern.same(A):
+                solver.set_phase(11)  # ordering and symbolic factorisation
+                solver._call_pardiso(A, rhs)
+            solver.set_phase(22)  # numerical factorisation only
+            solver._call_pardiso(A, rhs)
+        except PyPardisoError as error:
+            logger.debug("PARDISO factorisation failed: %s", error)
+            self._pattern = _PatternCache()
+            return None
+
+        def solve(b: np.ndarray) -> np.ndarray:
+            solver.set_phase(33)
+            return solver._call_pardiso(A, np.asfortranarray(b[:, None]))[:, 0]
+
+        return solve
+
+
+class Cholmod:
+    """CHOLMOD Cholesky of a symmetric positive definite matrix; symbolic analysis reused."""
+
+    name = "cholmod"
+
+    def __init__(self):
+        from sksparse import cholmod
+
+        self._cholmod = cholmod
+        self._factor = None
+        self._pattern = _PatternCache()
+        self._fallback = SuperLU()
+
+    def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
+        if not symmetric or np.iscomplexobj(A.data):
+            return self._fallback.factorise(A, symmetric)
+        A = A.tocsc()  # the same matrix for a symmetric one, in CHOLMOD's format
+        try:
+            if self._factor is None or not self._pattern.same(A):
+                self._factor = self._cholmod.analyze(A, mode="supernodal")
+            self._factor.cholesky_inplace(A)
+        except self._cholmod.CholmodNotPositiveDefiniteError:
+            return None
+        return self._factor.solve_A
+
+
+class AlgebraicMultigrid:
+    """Conjugate gradients with a smoothed-aggregation AMG preconditioner (pyamg)."""
+
+    name = "amg"
+    relative_tolerance = 1e-10
+    max_iterations = 2000
+
+    def __init__(self):
+        import pyamg
+
+        self._pyamg = pyamg
+        self._fallback = SuperLU()
+
+    def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
+        if not symmetric or np.iscomplexobj(A.data):
+            return self._fallback.factorise(A, symmetric)
+        hierarchy = self._pyamg.smoothed_aggregation_solver(A, symmetry="symmetric")
+        preconditioner = hierarchy.aspreconditioner(cycle="V")
+
+        def solve(b: np.ndarray) -> np.ndarray:
+            x, info = spla.cg(A, b, rtol=self.relative_tolerance, maxiter=self.max_iterations,
+                              M=preconditioner)
+            if info != 0:
+                logger.debug("AMG-CG did not converge (info %d)", info)
+                return np.full_like(b, np.nan)  # the nonlinear solver rejects the step
+            return x
+
+        return solve
+
+
+LINEAR_SOLVERS = {"superlu": SuperLU, "pardiso": Pardiso, "cholmod": Cholmod,
+                  "amg": AlgebraicMultigrid}
+
+
+def make_linear_solver(name: str = "auto", n_dofs: int = 0):
+    """The back-end called ``name`` (one of LINEAR_SOLVERS, or "auto": PARDISO from
+    AUTO_PARDISO_DOFS unknowns if pypardiso is installed, else SuperLU). ValueError for an
+    unknown name; ImportError naming the extra for a back-end that is not installed."""
+    if name == "auto":
+        if n_dofs >= AUTO_PARDISO_DOFS:
+            try:
+                return Pardiso()
+            except (ImportError, OSError):
+                pass
+        return SuperLU()
+    if name not in LINEAR_SOLVERS:
+        raise ValueError(
+            f"unknown linear solver '{name}' (one of auto, {', '.join(LINEAR_SOLVERS)})"
+        )
+    try:
+        return LINEAR_SOLVERS[name]()
+    except (ImportError, OSError) as error:
+        package = {"pardiso": "pypardiso", "cholmod": "scikit-sparse", "amg": "pyamg"}[name]
+        raise ImportError(
+            f"linear solver '{name}' needs {package} ({error}); "
+            f'install it with pip install "wrinkle[fast]"'
+        ) from None
+
+
+def diagonal_positions(A: sp.csr_matrix) -> np.ndarray:
+    """Index into A.data of each diagonal entry (n,); every diagonal entry must be stored."""
+    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+    positions = np.flatnonzero(rows == A.indices)
+    if positions.size != A.shape[0]:
+        raise ValueError("the sparsity pattern lacks diagonal entries")
+    return positions
