@@ -306,7 +306,8 @@ def cylinder(
     The wall has n_axial + 1 circles of n_circumferential nodes; wall node (i, j), at
     x = i length / n_axial and angle theta_j = 2 pi j / n_circumferential from +y towards +z,
     (x, radius cos theta_j, radius sin theta_j), is numbered i n_circumferential + j; each
-    quadrilateral between two circles is split into two triangles as in ``annulus``. Each cap
+    quadrilateral (i, j) between two circles is split into two triangles as in ``annulus``,
+    elements i n_circumferential + j and (n_axial + i) n_circumferential + j. Each cap
     is a ``disk`` of n_cap rings of elements whose outer circle is the wall's end circle: its
     centre and then its inner circles k = 1 .. n_cap - 1 (radius k radius / n_cap, nodes at
     the angles theta_j) follow the wall nodes, the root cap's before the tip cap's. All
