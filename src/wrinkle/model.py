@@ -31,6 +31,7 @@ from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh
 from wrinkle.solvers import ConvergenceError, make_solver
 from wrinkle.solvers.base import Evaluation, EvaluationFailure
+from wrinkle.timing import ASSEMBLY, ELEMENTS, Stopwatch
 from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, Wrinkling, WrinklingError
 
 logger = logging.getLogger("wrinkle")
@@ -440,13 +441,14 @@ class Model:
                              settings["linear_solver"])
         u = np.zeros(self.n_dofs) if u0 is None else np.array(u0, dtype=float)
         results = Results(self)
+        timer = results.stopwatch
         target = 1.0 / steps
         increment = target
         factor = 0.0
         while factor < 1.0 - 1e-12:
             trial_factor = min(1.0, factor + increment)
             try:
-                u, solved = self.solve_step(u, trial_factor, solver)
+                u, solved = self.solve_step(u, trial_factor, solver, timer=timer)
             except ConvergenceError as error:
                 if increment / 2 < min_step:
                     failure = ConvergenceError(
@@ -470,9 +472,13 @@ class Model:
                 increment = min(target, 2 * increment)
         return results
 
-    def solve_step(self, u: np.ndarray, load_factor: float, solver, prescribed=None):
-        """Solve one load level from the displacements u; returns (u, SolverResult)."""
+    def solve_step(self, u: np.ndarray, load_factor: float, solver, prescribed=None,
+                   timer: Stopwatch | None = None):
+        """Solve one load level from the displacements u; returns (u, SolverResult). ``timer``
+        accumulates the time of its parts."""
         problem = self.problem(load_factor, prescribed)
+        if timer is not None:
+            problem.timer = timer
         start = np.where(self.constrained, problem.prescribed, u)
         solved = solver.solve(problem, start)
         return solved.u, solved
@@ -517,16 +523,20 @@ class StepProblem:
         pattern = model.pattern
         self._constraint_positions = pattern.constraint_positions(model.constrained)
         self._constrained_diagonal = pattern.diagonal[model.constrained]
+        self.timer = Stopwatch()  # Model.solve shares one across the steps
 
     def evaluate(self, u: np.ndarray, stiffness: bool = True) -> Evaluation:
-        model = self.model
-        result = model.evaluate_elements(u, stiffness=stiffness)
-        internal = model.pattern.assemble_vector(result.forces)
+        model, timer = self.model, self.timer
+        with timer.part(ELEMENTS):
+            result = model.evaluate_elements(u, stiffness=stiffness)
+        with timer.part(ASSEMBLY):
+            internal = model.pattern.assemble_vector(result.forces)
         external = self.forces
         element_stiffness = result.stiffness
         energy = float(np.sum(result.energy) - self.forces @ u)
         if model.has_follower_loads:
-            follower, load_stiffness = model.follower_forces(u, self.load_factor, stiffness)
+            with timer.part(ELEMENTS):
+                follower, load_stiffness = model.follower_forces(u, self.load_factor, stiffness)
             external = external + follower
             energy -= self.load_factor * model.pressure_work(u)
             if model._edge_follower:
@@ -544,10 +554,11 @@ class StepProblem:
         )
         K = None
         if stiffness:
-            data = model.pattern.assemble_data(element_stiffness)
-            data[self._constraint_positions] = 0.0
-            data[self._constrained_diagonal] = 1.0
-            K = model.pattern.matrix(data)
+            with timer.part(ASSEMBLY):
+                data = model.pattern.assemble_data(element_stiffness)
+                data[self._constraint_positions] = 0.0
+                data[self._constrained_diagonal] = 1.0
+                K = model.pattern.matrix(data)
         return Evaluation(
             residual, energy, scale, counts, K, model.force_round_off, self.symmetric,
             model.pattern.diagonal,
@@ -572,6 +583,13 @@ class Results:
     def __init__(self, model: Model):
         self.model = model
         self.steps: list[StepResult] = []
+        self.stopwatch = Stopwatch()
+
+    @property
+    def timings(self) -> dict[str, float]:
+        """Wall seconds so far in element evaluation, assembly, linear solves, the rest, and
+        in total (``wrinkle.timing``)."""
+        return self.stopwatch.summary()
 
     def append(self, load_factor: float, u: np.ndarray, solved) -> StepResult:
         ev = solved.evaluation

@@ -10,6 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from wrinkle.solvers.linear import diagonal_positions, make_linear_solver
+from wrinkle.timing import LINEAR, Stopwatch
 
 logger = logging.getLogger("wrinkle.solver")
 
@@ -155,12 +156,24 @@ class RegularisedSolver:
         self.max_iterations = int(max_iterations)
         self.linear_solver = linear_solver
         self.linear = None  # the back-end, made at the first solve (it depends on the size)
+        self._timer = Stopwatch()
 
     def factorise(self, A: sp.csr_matrix, symmetric: bool):
-        """Solve function of the linear back-end for A (None if A is singular)."""
+        """Solve function of the linear back-end for A (None if A is singular); the time of
+        both goes to the problem's stopwatch."""
         if self.linear is None:
             self.linear = make_linear_solver(self.linear_solver, A.shape[0])
-        return self.linear.factorise(A, symmetric)
+        timer = self._timer
+        with timer.part(LINEAR):
+            solve = self.linear.factorise(A, symmetric)
+        if solve is None:
+            return None
+
+        def timed_solve(b: np.ndarray) -> np.ndarray:
+            with timer.part(LINEAR):
+                return solve(b)
+
+        return timed_solve
 
 
     # to be defined by subclasses
@@ -176,6 +189,7 @@ class RegularisedSolver:
 
     def solve(self, problem: Problem, u0: np.ndarray) -> SolverResult:
         """Solve from u0 (prescribed values already set); raise ConvergenceError if it fails."""
+        self._timer = getattr(problem, "timer", None) or Stopwatch()
         u = np.array(u0, dtype=float)
         ev = try_evaluate(problem, u)
         if ev is None:
