@@ -61,6 +61,42 @@ class ShearStretchRow:
         return max(abs(self.F1 - self.F1_analytic), abs(self.F2 - self.F2_analytic)) / scale
 
 
+def shear_stretch_sequence(
+    model: Model, f: float, stretches=STRETCHES, shear: float = SHEAR, solver=None,
+) -> list[ShearStretchRow]:
+    """The paper's sequence on ``model`` (a unit square whose boundary nodes, and only they,
+    are constrained; one material): shear first, then each stretch v started from the
+    previous solution. One row per v, compared with the homogeneous solution."""
+    mesh = model.mesh
+    X = mesh.nodes
+    top = mesh.node_sets["top"]
+    interior = np.flatnonzero(~model.constrained.reshape(-1, 3).any(axis=1))
+    solver = solver or make_solver("newton", tolerance=1e-12, max_iterations=100)
+    material = model.groups[0][1].material.material
+    rows = []
+    u = np.zeros(model.n_dofs)
+    for v in stretches:
+        homogeneous = np.column_stack([shear * X[:, 1], v * X[:, 1], np.zeros(mesh.n_nodes)])
+        u, solved = model.solve_step(u, 1.0, solver, prescribed=homogeneous.ravel())
+        internal = model.internal_forces(u).reshape(-1, 3)
+        F1, F2 = internal[top, 0].sum(), internal[top, 1].sum()
+        F1_ref, F2_ref, reference = homogeneous_edge_forces(material, shear, v)
+        states = np.unique(model.evaluate_elements(u, stiffness=False).response.state)
+        state = STATE_NAMES[states[0]] if states.size == 1 else "mixed"
+        error = np.abs(u.reshape(-1, 3)[interior] - homogeneous[interior]).max(initial=0.0)
+        rows.append(
+            ShearStretchRow(
+                float(f), float(v), float(F1), float(F2), F1_ref, F2_ref, state,
+                reference.state, solved.iterations, float(error),
+            )
+        )
+        logger.info(
+            "f = %g, v = %.3f: F1 = %.10f, F2 = %.10f (%s, %d iterations)",
+            f, v, F1, F2, state, solved.iterations,
+        )
+    return rows
+
+
 def shear_stretch(
     anisotropy=ANISOTROPY,
     stretches=STRETCHES,
@@ -68,39 +104,16 @@ def shear_stretch(
     method: str = "newton",
     tolerance: float = 1e-12,
 ) -> list[ShearStretchRow]:
-    """Run the test for every f in ``anisotropy`` over the stretches v (each step started from
-    the previous solution) and return one row per (f, v)."""
-    rows = []
+    """Run the test for every f in ``anisotropy`` on the paper's 3 x 3 mesh and return one row
+    per (f, v)."""
     mesh = rectangle(1.0, 1.0, 3, 3)
-    X = mesh.nodes
     boundary = np.unique(np.concatenate([mesh.node_sets[s] for s in ("left", "right", "bottom", "top")]))
-    top = mesh.node_sets["top"]
-    interior = np.setdiff1d(np.arange(mesh.n_nodes), boundary)
     solver = make_solver(method, tolerance=tolerance, max_iterations=100)
+    rows = []
     for f in anisotropy:
-        material = paper_material(f)
-        model = Model(mesh, material, fibre_direction=(1.0, 0.0, 0.0))
+        model = Model(mesh, paper_material(f), fibre_direction=(1.0, 0.0, 0.0))
         model.prescribe(boundary, np.zeros(3))
-        u = np.zeros(model.n_dofs)
-        for v in stretches:
-            homogeneous = np.column_stack([shear * X[:, 1], v * X[:, 1], np.zeros(mesh.n_nodes)])
-            u, solved = model.solve_step(u, 1.0, solver, prescribed=homogeneous.ravel())
-            internal = model.internal_forces(u).reshape(-1, 3)
-            F1, F2 = internal[top, 0].sum(), internal[top, 1].sum()
-            F1_ref, F2_ref, reference = homogeneous_edge_forces(material, shear, v)
-            states = np.unique(model.evaluate_elements(u, stiffness=False).response.state)
-            state = STATE_NAMES[states[0]] if states.size == 1 else "mixed"
-            error = np.abs(u.reshape(-1, 3)[interior] - homogeneous[interior]).max()
-            rows.append(
-                ShearStretchRow(
-                    float(f), float(v), float(F1), float(F2), F1_ref, F2_ref, state,
-                    reference.state, solved.iterations, float(error),
-                )
-            )
-            logger.info(
-                "f = %g, v = %.3f: F1 = %.10f, F2 = %.10f (%s, %d iterations)",
-                f, v, F1, F2, state, solved.iterations,
-            )
+        rows += shear_stretch_sequence(model, f, stretches, shear, solver)
     return rows
 
 
