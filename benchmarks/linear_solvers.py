@@ -15,7 +15,6 @@ held. Medians of --repeat runs. Prints a table and writes it as CSV.
 from __future__ import annotations
 
 import argparse
-import csv
 import gc
 import statistics
 import time
@@ -23,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy.interpolate import RegularGridInterpolator
+from table import write_csv
 
 from wrinkle.case import read_case
 from wrinkle.solvers.linear import LINEAR_SOLVERS, diagonal_positions, make_linear_solver
@@ -128,11 +128,7 @@ def main() -> None:
                   f"{row['relative_residual']:11.1e} {row['factor_memory_mb']:9.0f}", flush=True)
     keys = ["elements", "unknowns", "symmetric", "solver", "status", "first_factorisation_s",
             "refactorisation_s", "solve_s", "relative_residual", "factor_memory_mb"]
-    with open(args.csv, "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=keys, extrasaction="ignore")
-        writer.writeheader()
-        writer.writerows(rows)
-    print(f"wrote {args.csv}")
+    write_csv(args.csv, rows, keys)
 
 
 if __name__ == "__main__":

@@ -15,13 +15,14 @@ Prints a table and writes it as CSV.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import resource
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+from table import write_csv
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZES = {  # squares per side: 2 n^2 triangles
@@ -107,11 +108,7 @@ def main() -> None:
                   f"{row['total_s']:8.1f} {row['outside_linear']:10.0%} "
                   f"{row['peak_rss_mb']:8.0f}  {row['result_name']} = {row['result']:.6g}",
                   flush=True)
-    with open(args.csv, "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=FIELDS, extrasaction="ignore")
-        writer.writeheader()
-        writer.writerows(rows)
-    print(f"wrote {args.csv}")
+    write_csv(args.csv, rows, FIELDS)
 
 
 if __name__ == "__main__":
