@@ -98,9 +98,10 @@ def run(case: Path, out: Path, quick: bool) -> Outcome:
     ]
     study = Convergence("N1 relative error against the exact homogeneous solution", sizes,
                         errors, 0.0)
-    figures = [out / "state_map.png", out / "convergence.png"]
-    plot_state_map(model, u, figures[0], f"Simple shear, gamma = {gamma:g}", "m")
-    plot_convergence([study], figures[1], "Simple shear: error against mesh size")
+    figures = [out / "stress_profile.png", out / "state_map.png", out / "convergence.png"]
+    _plot_profile(model, report, closed, exact, E * thickness * gamma, figures[0])
+    plot_state_map(model, u, figures[1], f"Simple shear, gamma = {gamma:g}", "m")
+    plot_convergence([study], figures[2], "Simple shear: error against mesh size")
     text = (
         f"A {width:g} m x {np.ptp(model.mesh.nodes[:, 1]):g} m sheet (E = {E:g} N/m², "
         f"t = {thickness:g} m, ν = 0.3) with every edge node on x = X + γY, γ = {gamma:g}, "
@@ -116,6 +117,37 @@ def run(case: Path, out: Path, quick: bool) -> Outcome:
         "set just above this difference of the two theories, not from the finite elements."
     )
     return Outcome(checks, figures, text, [study])
+
+
+def _plot_profile(model, report, closed: dict, exact: dict, scale: float, path: Path) -> None:
+    """N1, N_xx, N_yy, N_xy of every element (over its centroid's x) against the closed form
+    and the exact homogeneous solution, all divided by E t gamma."""
+    from wrinkle.plot import _pyplot
+
+    plt = _pyplot()
+    centroid_x = model.mesh.nodes[model.mesh.triangles, 0].mean(axis=1)
+    N1 = report.principal_stress[:, 1]
+    t = report.tension_direction
+    components = {"N1": N1, "N_xx": N1 * t[:, 0] ** 2, "N_yy": N1 * t[:, 1] ** 2,
+                  "N_xy": N1 * t[:, 0] * t[:, 1]}
+    closed_values = {"N1": closed["N1"], "N_xx": closed["N_xy"], "N_yy": closed["N_xy"],
+                     "N_xy": closed["N_xy"]}
+    fig, ax = plt.subplots(figsize=(7.0, 4.5), layout="constrained")
+    for (name, values), marker in zip(components.items(), "os^v"):
+        line = ax.plot(centroid_x, values / scale, marker, ms=4, ls="none",
+                       label=f"{name}, elements")[0]
+        ax.axhline(closed_values[name] / scale, color=line.get_color(), lw=1.0)
+    ax.axhline(exact["N1"] / scale, color="0.3", ls=":", lw=1.0,
+               label="N1, exact finite-strain solution")
+    ax.plot([], [], color="0.3", lw=1.0, label="closed form (lines)")
+    ax.set_xlabel("element centroid x (m)")
+    ax.set_ylabel(r"stress resultant / $E t \gamma$")
+    ax.set_title("Simple shear: element stresses against the tension-field solution\n"
+                 "N1 = Etγ/2, N_xx = N_yy = N_xy = Etγ/4", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="center right")
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
 
 
 BENCHMARK = Benchmark("simple_shear", "Simple shear at small strain (Mansfield; Wong & "
