@@ -177,8 +177,8 @@ def make_linear_solver(name: str = "auto", n_dofs: int = 0):
         if n_dofs >= AUTO_PARDISO_DOFS:
             try:
                 return Pardiso()
-            except (ImportError, OSError):
-                pass
+            except (ImportError, OSError) as error:  # the extra is optional: fall back
+                logger.debug("PARDISO unavailable (%s); using SuperLU", error)
         return SuperLU()
     if name not in LINEAR_SOLVERS:
         raise ValueError(
