@@ -63,24 +63,27 @@ class ShearStretchRow:
 
 def shear_stretch_sequence(
     model: Model, f: float, stretches=STRETCHES, shear: float = SHEAR, solver=None,
+    references=None,
 ) -> list[ShearStretchRow]:
     """The paper's sequence on ``model`` (a unit square whose boundary nodes, and only they,
     are constrained; one material): shear first, then each stretch v started from the
-    previous solution. One row per v, compared with the homogeneous solution."""
+    previous solution. One row per v, compared with the homogeneous solution: ``references``,
+    the (F1, F2, RelaxedState) of each v from ``homogeneous_edge_forces``, computed if None."""
     mesh = model.mesh
     X = mesh.nodes
     top = mesh.node_sets["top"]
     interior = np.flatnonzero(~model.constrained.reshape(-1, 3).any(axis=1))
     solver = solver or make_solver("newton", tolerance=1e-12, max_iterations=100)
     material = model.groups[0][1].material.material
+    if references is None:
+        references = [homogeneous_edge_forces(material, shear, v) for v in stretches]
     rows = []
     u = np.zeros(model.n_dofs)
-    for v in stretches:
+    for v, (F1_ref, F2_ref, reference) in zip(stretches, references):
         homogeneous = np.column_stack([shear * X[:, 1], v * X[:, 1], np.zeros(mesh.n_nodes)])
         u, solved = model.solve_step(u, 1.0, solver, prescribed=homogeneous.ravel())
         internal = model.internal_forces(u).reshape(-1, 3)
         F1, F2 = internal[top, 0].sum(), internal[top, 1].sum()
-        F1_ref, F2_ref, reference = homogeneous_edge_forces(material, shear, v)
         states = np.unique(model.evaluate_elements(u, stiffness=False).response.state)
         state = STATE_NAMES[states[0]] if states.size == 1 else "mixed"
         error = np.abs(u.reshape(-1, 3)[interior] - homogeneous[interior]).max(initial=0.0)
