@@ -138,3 +138,33 @@ def test_diagonal_positions_with_unused_node():
     rows, cols = pattern_entries(pattern)
     assert np.array_equal(rows[pattern.diagonal], np.arange(15))
     assert np.array_equal(cols[pattern.diagonal], np.arange(15))
+
+
+@pytest.mark.parametrize("renumber", [False, True])
+def test_adding_blocks_of_element_matrices_equals_assembling_all(renumber):
+    """Element matrices added block by block (slices, index arrays with repeats) into the data
+    give the same sums as assembling all at once (checked against the dense loop above),
+    whether blocks touch a short span of the data (nodes numbered row by row: one bincount)
+    or a long one (nodes renumbered at random: the np.add.at branch)."""
+    from wrinkle.mesh import rectangle
+
+    mesh = rectangle(1.0, 1.0, 30, 30)
+    triangles = mesh.triangles
+    rng = np.random.default_rng(4)
+    if renumber:
+        triangles = rng.permutation(mesh.n_nodes)[triangles]
+    pattern = SparsityPattern(triangles, mesh.n_nodes)
+    Ke = rng.normal(size=(len(triangles), 9, 9))
+    data = np.zeros(pattern.nnz)
+    spans = []
+    for start in range(0, len(triangles), 10):
+        block = slice(start, start + 10)
+        pattern.add_to_data(data, block, Ke[block])
+        positions = pattern.element_to_data[block]
+        spans.append((positions.max() - positions.min() + 1) / positions.size)
+    assert (max(spans) > 8) == renumber  # which branch the blocks took
+    repeated = np.array([3, 3, 100, 7])
+    pattern.add_to_data(data, repeated, Ke[repeated])
+    Ke[[3, 100, 7]] += Ke[[3, 100, 7]]
+    Ke[3] += Ke[3] / 2
+    np.testing.assert_allclose(data, pattern.assemble_data(Ke), atol=1e-12)

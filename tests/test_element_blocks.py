@@ -63,7 +63,7 @@ def test_blocks_do_not_change_results(monkeypatch, name, stiffness):
     counts = np.bincount(whole.response.state, minlength=3)
     assert counts[TAUT] > 0 and counts[WRINKLED] > 0 and counts[SLACK] > 0
     monkeypatch.setattr(wrinkle.element, "_BLOCK", 50)
-    monkeypatch.setattr(wrinkle.element, "_KERNEL_BLOCK", 16)
+    monkeypatch.setattr(wrinkle.element, "KERNEL_BLOCK", 16)
     blocks = elements.evaluate(x, stiffness=stiffness)
     assert (blocks.stiffness is None) == (not stiffness)
     _compare(blocks, whole)

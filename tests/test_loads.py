@@ -6,7 +6,15 @@ import numpy as np
 import pytest
 
 import wrinkle
-from wrinkle.loads import boundary_edges, edge_follower_forces, pressure_forces, pressure_volume
+import wrinkle.element
+import wrinkle.model
+from wrinkle.loads import (
+    boundary_edges,
+    edge_follower_forces,
+    pressure_forces,
+    pressure_volume,
+    subtract_pressure_stiffness,
+)
 from wrinkle.materials import StVenantKirchhoff
 
 RNG = np.random.default_rng(11)
@@ -44,6 +52,16 @@ def test_pressure_load_stiffness_is_derivative_of_forces():
     _, K = pressure_forces(x, p)
     fd = finite_difference(lambda y: pressure_forces(y, p, stiffness=False)[0], x)
     np.testing.assert_allclose(K, fd, atol=1e-8)
+
+
+def test_pressure_stiffness_subtracted_in_place_equals_the_full_matrices():
+    rng = np.random.default_rng(7)
+    x = rng.normal(size=(6, 3, 3))
+    p = rng.uniform(0.5, 2.0, 6)
+    K = rng.normal(size=(6, 9, 9))
+    expected = K - pressure_forces(x, p)[1]
+    subtract_pressure_stiffness(K, x, p)
+    np.testing.assert_allclose(K, expected, rtol=0, atol=1e-14)
 
 
 def test_pressure_volume_gradient_is_pressure_force_on_closed_surface():
@@ -112,10 +130,18 @@ def test_dead_edge_loads_and_gravity_totals():
         model.add_edge_load([0], normal=1.0)
 
 
-def test_model_stiffness_with_follower_loads_matches_finite_difference():
+@pytest.mark.parametrize("block", [None, 5])
+def test_model_stiffness_with_follower_loads_matches_finite_difference(monkeypatch, block):
     """Pressure and following edge tension on a bulged, taut membrane: the assembled tangent
-    (material, geometric and load stiffness) is the derivative of the residual."""
+    (material, geometric and load stiffness) is the derivative of the residual; also when it
+    is assembled in blocks of 5 elements from two material groups."""
+    if block is not None:
+        monkeypatch.setattr(wrinkle.element, "KERNEL_BLOCK", block)
+        monkeypatch.setattr(wrinkle.model, "KERNEL_BLOCK", block)
     mesh, model = _model(3)
+    if block is not None:
+        softer = StVenantKirchhoff.isotropic(E=30.0, nu=0.2, thickness=0.1)
+        model.assign_material(softer, elements=np.arange(mesh.n_elements) % 3 == 0)
     model.fix(mesh.node_sets["left"])
     model.add_pressure(0.5)
     model.add_edge_load(mesh.node_sets["right"], normal=2.0, follow=True)

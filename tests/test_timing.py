@@ -33,3 +33,14 @@ def test_a_solve_reports_every_part():
         assert timings[part] > 0.0, part
     parts = timings[ELEMENTS] + timings[ASSEMBLY] + timings[LINEAR] + timings["rest"]
     assert abs(parts - timings["total"]) <= 1e-9 * timings["total"]
+
+
+def test_an_inner_part_counts_only_for_itself():
+    watch = Stopwatch()
+    with watch.part(ELEMENTS):
+        time.sleep(0.01)
+        with watch.part(ASSEMBLY):
+            time.sleep(0.03)
+    summary = watch.summary()
+    assert summary[ASSEMBLY] >= 0.03
+    assert 0.01 <= summary[ELEMENTS] < 0.03

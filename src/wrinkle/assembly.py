@@ -2,7 +2,9 @@
 
 The pattern is built from node pairs (one 3x3 block per pair of nodes that share an element),
 so its construction sorts 9 keys per element rather than 81. Each element entry gets the index
-of its place in the CSR data array; assembling is then one ``np.bincount`` per iteration.
+of its place in the CSR data array; assembling is then one ``np.bincount`` per iteration, or
+one per block of elements (``add_to_data``) so that the element matrices of a large mesh never
+exist all at once.
 Supports are applied without changing the pattern: constrained rows and columns are zeroed and
 their diagonal set to one.
 """
@@ -28,9 +30,10 @@ class SparsityPattern:
     """CSR pattern of the global stiffness of a triangle mesh with 3 dofs per node.
 
     triangles: (n, 3) node indices; n_nodes: number of nodes.
-    Attributes: ``element_dofs`` (n, 9), ``indptr``, ``indices``, ``element_to_data`` (n*81,)
-    intp index into the CSR data of each element-matrix entry, ``diagonal`` (n_dofs,) index of
-    each diagonal entry in the data.
+    Attributes: ``element_dofs`` (n, 9), ``indptr``, ``indices``, ``element_to_data`` (n, 81)
+    index into the CSR data of each element-matrix entry (int32 while nnz allows: 4 bytes
+    per entry, 324 MB for 10^6 elements), ``diagonal`` (n_dofs,) index of each diagonal entry
+    in the data.
     """
 
     def __init__(self, triangles: np.ndarray, n_nodes: int):
@@ -73,15 +76,13 @@ class SparsityPattern:
             index_dtype
         )
         # (element, k, i, l, j): entry (3 a_k + i, 3 a_l + j) of block (a_k, a_l), that is
-        # _position(a_k, block, i, j) = (6 start + 3 block) + i (3 degree) + j. Stored as intp,
-        # the index type of np.bincount, so that assembling does not convert n*81 indices to it
-        # every time.
+        # _position(a_k, block, i, j) = (6 start + 3 block) + i (3 degree) + j.
         block_base = (6 * block_ptr[triangles])[:, :, None] + 3 * block  # (n, 3, 3)
         row_step = 3 * degree[triangles]  # (n, 3)
         element_to_data = (
             block_base[:, :, None, :, None] + row_step[:, :, None, None, None] * i[:, None, None] + j
         )
-        self.element_to_data = element_to_data.astype(np.intp, copy=False).reshape(-1)
+        self.element_to_data = element_to_data.astype(index_dtype).reshape(n, 81)
         nodes = np.arange(n_nodes)
         diagonal_block = np.searchsorted(keys, nodes * (n_nodes + 1))
         self.diagonal = self._position(
@@ -102,8 +103,25 @@ class SparsityPattern:
     def assemble_data(self, element_matrices: np.ndarray) -> np.ndarray:
         """Sum (n, 9, 9) element matrices into the CSR data array, (nnz,)."""
         return np.bincount(
-            self.element_to_data, weights=element_matrices.ravel(), minlength=self.nnz
+            self.element_to_data.ravel(), weights=element_matrices.ravel(), minlength=self.nnz
         )
+
+    def add_to_data(self, data: np.ndarray, elements, element_matrices: np.ndarray) -> None:
+        """Add the (m, 9, 9) matrices of some elements (a slice or indices, repeats allowed)
+        into the CSR data array ``data`` (nnz,), in place.
+
+        One bincount over the span of data positions the elements touch: for a mesh numbered
+        so that neighbouring elements have nearby nodes (gmsh, the generators) a block of
+        elements touches a short span; otherwise ``np.add.at``, slower but with the same sums.
+        """
+        positions = self.element_to_data[elements].ravel()
+        weights = element_matrices.ravel()
+        first, last = int(positions.min()), int(positions.max())
+        span = last - first + 1
+        if span <= 8 * positions.size:
+            data[first:last + 1] += np.bincount(positions - first, weights, minlength=span)
+        else:
+            np.add.at(data, positions, weights)
 
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:
         """CSR matrix with this pattern and the given data (not copied)."""

@@ -39,10 +39,10 @@ class ElementResult:
 
 
 # Elements per block: the wrinkling response runs on blocks of _BLOCK elements and the element
-# kernels on sub-blocks of _KERNEL_BLOCK, so that their temporaries stay in the processor caches
+# kernels on sub-blocks of KERNEL_BLOCK, so that their temporaries stay in the processor caches
 # (and memory stays bounded) on large meshes, while numpy's per-call overhead stays small.
 _BLOCK = 1 << 15
-_KERNEL_BLOCK = 1 << 13
+KERNEL_BLOCK = 1 << 13
 
 
 def strain_displacement(F: np.ndarray, shape_gradient: np.ndarray) -> np.ndarray:
@@ -120,10 +120,14 @@ class MembraneElements:
         self.geometry = geometry
         self.material = material
 
-    def evaluate(self, x_elements: np.ndarray, stiffness: bool = True) -> ElementResult:
+    def evaluate(self, x_elements: np.ndarray, stiffness: bool = True,
+                 stiffness_sink=None) -> ElementResult:
         """Forces (and stiffness) at current node coordinates x_elements, (n, 3, 3).
 
-        Elements are evaluated block by block (results do not depend on the blocks). Raises
+        Elements are evaluated block by block (results do not depend on the blocks). With
+        ``stiffness_sink(elements, K)`` the stiffness of each block (elements: a slice of this
+        group's rows, K: (m, 9, 9), overwritten afterwards) goes to the sink, to be assembled
+        at once, and the result holds none: no (n, 9, 9) array on a large mesh. Raises
         WrinklingError listing every element whose wrinkling conditions could not be solved.
         """
         g = self.geometry
@@ -131,12 +135,13 @@ class MembraneElements:
         if n <= _BLOCK:
             F = deformation_gradient(x_elements, g.shape_gradient)
             response = self.material.response(right_cauchy_green(F), tangent=stiffness)
-            forces, K = self._forces_and_stiffness(F, slice(0, n), response, stiffness)
+            forces, K = self._forces_and_stiffness(F, slice(0, n), response, stiffness,
+                                                   sink=stiffness_sink)
             return ElementResult(F, response, forces, K, g.area * response.energy)
 
         F = np.empty((n, 3, 2))
         forces = np.empty((n, 9))
-        K = np.empty((n, 9, 9)) if stiffness else None
+        K = np.empty((n, 9, 9)) if stiffness and stiffness_sink is None else None
         fields = {
             "state": np.empty(n, dtype=np.int8),
             "stress": np.empty((n, 2, 2)),
@@ -162,29 +167,35 @@ class MembraneElements:
                 if array is not None:
                     array[block] = getattr(r, name)
             self._forces_and_stiffness(
-                F_block, block, r, stiffness, forces[block], K[block] if stiffness else None
+                F_block, block, r, stiffness, forces[block], None if K is None else K[block],
+                stiffness_sink,
             )
         if failed:
             raise WrinklingError(np.concatenate(failed))
         response = WrinklingResponse(**fields)
         return ElementResult(F, response, forces, K, g.area * response.energy)
 
-    def _forces_and_stiffness(self, F, elements, response, stiffness, forces=None, K=None):
+    def _forces_and_stiffness(self, F, elements, response, stiffness, forces=None, K=None,
+                              sink=None):
         """Forces (m, 9) and stiffness (m, 9, 9) or None of the block ``elements`` (a slice),
-        written into ``forces`` and ``K`` if given; computed in sub-blocks."""
+        written into ``forces`` and ``K`` if given, or the stiffness of each sub-block handed
+        to ``sink(rows, K_sub)`` (then None is returned for it); computed in sub-blocks."""
         g = self.geometry
         m = F.shape[0]
         if forces is None:
             forces = np.empty((m, 9))
         if stiffness and K is None:
-            K = np.empty((m, 9, 9))
-        for start in range(0, m, _KERNEL_BLOCK):
-            sub = slice(start, min(start + _KERNEL_BLOCK, m))
+            K = np.empty((min(m, KERNEL_BLOCK) if sink else m, 9, 9))
+        for start in range(0, m, KERNEL_BLOCK):
+            sub = slice(start, min(start + KERNEL_BLOCK, m))
             mesh_sub = slice(elements.start + sub.start, elements.start + sub.stop)
             area, grad = g.area[mesh_sub], g.shape_gradient[mesh_sub]
             F_sub, stress = F[sub], response.stress[sub]
             _nodal_forces(area, F_sub, grad, stress, forces[sub])
             if stiffness:
                 B = strain_displacement(F_sub, grad)
-                element_stiffness(area, B, response.tangent[sub], grad, stress, out=K[sub])
-        return forces, K if stiffness else None
+                out = K[:sub.stop - sub.start] if sink else K[sub]
+                element_stiffness(area, B, response.tangent[sub], grad, stress, out=out)
+                if sink:
+                    sink(mesh_sub, out)
+        return forces, K if stiffness and not sink else None

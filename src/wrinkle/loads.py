@@ -50,6 +50,17 @@ def pressure_forces(x: np.ndarray, pressure: np.ndarray, stiffness: bool = True)
     return forces, K.reshape(-1, 9, 9).copy()
 
 
+def subtract_pressure_stiffness(K: np.ndarray, x: np.ndarray, pressure: np.ndarray) -> None:
+    """K -= d f / d u of ``pressure_forces``, in place: K (n, 9, 9) element matrices (the
+    tangent of the internal minus the external forces), x (n, 3 nodes, 3), pressure (n,).
+
+    Row block k of the load stiffness is the same for every node k (each takes a third of
+    p c / 2), so it is subtracted by broadcasting, without an (n, 9, 9) copy.
+    """
+    dc = _area_vector_derivative(x) * (pressure[:, None, None, None] / 6.0)  # (n, l, i, j)
+    K.reshape(-1, 3, 3, 3, 3)[...] -= dc.transpose(0, 2, 1, 3)[:, None]
+
+
 def pressure_volume(x: np.ndarray) -> np.ndarray:
     """Signed volume of the cone from the origin to each triangle, x1.(x2 x x3)/6, (n,).
 

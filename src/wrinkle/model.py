@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wrinkle.assembly import DOFS_PER_NODE, SparsityPattern
-from wrinkle.element import ElementResult, MembraneElements
+from wrinkle.element import KERNEL_BLOCK, ElementResult, MembraneElements
 from wrinkle.kinematics import ReferenceGeometry, element_coordinates, reference_geometry
 from wrinkle.loads import (
     boundary_edges,
@@ -26,6 +26,7 @@ from wrinkle.loads import (
     edge_follower_forces,
     pressure_forces,
     pressure_volume,
+    subtract_pressure_stiffness,
 )
 from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh
@@ -291,49 +292,77 @@ class Model:
         return bool(np.any(self._pressure != 0) or self._edge_follower)
 
     # -- evaluation ---------------------------------------------------------------------
-    def evaluate_elements(self, u: np.ndarray, stiffness: bool = True) -> ElementResult:
-        """Element forces, stiffness and states at displacements u, (n_dofs,)."""
+    def evaluate_elements(self, u: np.ndarray, stiffness: bool = True,
+                          stiffness_sink=None) -> ElementResult:
+        """Element forces, stiffness and states at displacements u, (n_dofs,).
+
+        stiffness_sink(elements, K): if given, receives the stiffness block by block (mesh
+        element indices or a slice, (m, 9, 9)) instead of the result holding all of it.
+        """
         x = element_coordinates(self.mesh.nodes + u.reshape(-1, 3), self.mesh.triangles)
         groups = self.groups
         results = []
         for index, elements in groups:
+            sink = stiffness_sink
+            if sink is not None and len(groups) > 1:
+                def sink(rows, K, index=index):
+                    stiffness_sink(index[rows], K)
             try:
-                results.append(
-                    elements.evaluate(x if len(groups) == 1 else x[index], stiffness=stiffness)
-                )
+                results.append(elements.evaluate(
+                    x if len(groups) == 1 else x[index], stiffness=stiffness, stiffness_sink=sink
+                ))
             except WrinklingError as error:  # group rows -> mesh elements
                 raise EvaluationFailure(str(WrinklingError(index[error.elements]))) from error
         if len(results) == 1:
             return results[0]
         return _concatenate_results(results, self._inverse_order)
 
-    def follower_forces(self, u: np.ndarray, load_factor: float, stiffness: bool = True):
-        """Assembled follower loads at u: forces (n_dofs,) and d f / d u data (element-wise
-        (n, 9, 9) on the triangles, or None)."""
+    def follower_forces(self, u: np.ndarray, load_factor: float, stiffness: bool = True,
+                        stiffness_sink=None, pressure_stiffness: bool = True):
+        """Assembled follower loads at u: forces (n_dofs,) and their load stiffness d f / d u,
+        element-wise (n, 9, 9) on the triangles (None if not asked or no follower load), or
+        handed block by block to ``stiffness_sink(elements, K)`` (then None is returned).
+        pressure_stiffness=False leaves the pressure's out (``subtract_pressure_stiffness``
+        takes it into the element blocks instead)."""
         x_nodes = self.mesh.nodes + u.reshape(-1, 3)
         forces = np.zeros(self.n_dofs)
-        K = None
+        blocks = []  # (elements, K) when no sink is given
+        sink = stiffness_sink or (lambda elements, k: blocks.append((elements, k.copy())))
         loaded = np.flatnonzero(self._pressure)
         if loaded.size:
             x = x_nodes[self.mesh.triangles[loaded]]
-            f, k = pressure_forces(x, load_factor * self._pressure[loaded], stiffness)
+            pressure = load_factor * self._pressure[loaded]
+            f, _ = pressure_forces(x, pressure, stiffness=False)
             forces += np.bincount(self.pattern.element_dofs[loaded].ravel(), f.ravel(),
                                   minlength=self.n_dofs)
-            if stiffness:
-                K = np.zeros((self.mesh.n_elements, 9, 9))
-                K[loaded] = k
+            for start in range(0, loaded.size, KERNEL_BLOCK) if stiffness and pressure_stiffness \
+                    else ():
+                block = slice(start, start + KERNEL_BLOCK)
+                sink(loaded[block], pressure_forces(x[block], pressure[block])[1])
         for triples, q, owner, local_dofs in self._edge_follower:
             f, k = edge_follower_forces(x_nodes[triples], load_factor * q, stiffness)
             dofs = (3 * triples[:, :, None] + np.arange(3)).reshape(-1, 9)
             forces += np.bincount(dofs.ravel(), f.ravel(), minlength=self.n_dofs)
             if stiffness:
-                if K is None:
-                    K = np.zeros((self.mesh.n_elements, 9, 9))
-                in_triangle = np.empty_like(k)
+                in_triangle = np.zeros((k.shape[0], 9, 9))
                 rows = np.arange(k.shape[0])[:, None, None]
                 in_triangle[rows, local_dofs[:, :, None], local_dofs[:, None, :]] = k
-                np.add.at(K, owner, in_triangle)
+                sink(owner, in_triangle)
+        if not blocks:
+            return forces, None
+        K = np.zeros((self.mesh.n_elements, 9, 9))
+        for elements, k in blocks:
+            np.add.at(K, elements, k)
         return forces, K
+
+    def subtract_pressure_stiffness(self, K: np.ndarray, x_nodes: np.ndarray, elements,
+                                    load_factor: float) -> None:
+        """Subtract the pressure's load stiffness from the element matrices K (m, 9, 9) of
+        ``elements`` (a slice or indices) in place; x_nodes (n_nodes, 3) current positions."""
+        pressure = self._pressure[elements]
+        if np.any(pressure):
+            x = x_nodes[self.mesh.triangles[elements]]
+            subtract_pressure_stiffness(K, x, load_factor * pressure)
 
     def pressure_work(self, u: np.ndarray) -> float:
         """Sum of p V_cone over the pressurised elements at full load (``pressure_volume``):
@@ -527,22 +556,38 @@ class StepProblem:
 
     def evaluate(self, u: np.ndarray, stiffness: bool = True) -> Evaluation:
         model, timer = self.model, self.timer
+        pattern = model.pattern
+        data = np.zeros(pattern.nnz) if stiffness else None
+
+        x_nodes = model.mesh.nodes + u.reshape(-1, 3)
+
+        def add_element_stiffness(elements, K):  # assembled block by block as evaluated
+            model.subtract_pressure_stiffness(K, x_nodes, elements, self.load_factor)
+            with timer.part(ASSEMBLY):
+                pattern.add_to_data(data, elements, K)
+
+        def subtract_load_stiffness(elements, K):
+            with timer.part(ASSEMBLY):
+                pattern.add_to_data(data, elements, -K)
+
         with timer.part(ELEMENTS):
-            result = model.evaluate_elements(u, stiffness=stiffness)
+            result = model.evaluate_elements(
+                u, stiffness=stiffness, stiffness_sink=add_element_stiffness if stiffness else None
+            )
         with timer.part(ASSEMBLY):
-            internal = model.pattern.assemble_vector(result.forces)
+            internal = pattern.assemble_vector(result.forces)
         external = self.forces
-        element_stiffness = result.stiffness
         energy = float(np.sum(result.energy) - self.forces @ u)
         if model.has_follower_loads:
             with timer.part(ELEMENTS):
-                follower, load_stiffness = model.follower_forces(u, self.load_factor, stiffness)
+                follower, _ = model.follower_forces(
+                    u, self.load_factor, stiffness, subtract_load_stiffness if stiffness else None,
+                    pressure_stiffness=False,
+                )
             external = external + follower
             energy -= self.load_factor * model.pressure_work(u)
             if model._edge_follower:
                 energy = np.nan  # follower edge loads have no potential
-            if stiffness and load_stiffness is not None:
-                element_stiffness = element_stiffness - load_stiffness
         residual = np.where(self.free, external - internal, 0.0)
         reactions = internal[~self.free] - external[~self.free]
         scale = max(np.linalg.norm(external), np.linalg.norm(reactions))
@@ -555,7 +600,6 @@ class StepProblem:
         K = None
         if stiffness:
             with timer.part(ASSEMBLY):
-                data = model.pattern.assemble_data(element_stiffness)
                 data[self._constraint_positions] = 0.0
                 data[self._constrained_diagonal] = 1.0
                 K = model.pattern.matrix(data)

@@ -12,19 +12,28 @@ LINEAR = "linear solves"
 
 
 class Stopwatch:
-    """Accumulates seconds per named part: ``with watch.part(ELEMENTS): ...``."""
+    """Accumulates seconds per named part: ``with watch.part(ELEMENTS): ...``.
+
+    Parts may nest (assembly of each block inside element evaluation): the time of an inner
+    part counts for it alone, not for the part around it.
+    """
 
     def __init__(self):
         self.seconds: dict[str, float] = defaultdict(float)
         self._start = time.perf_counter()
+        self._inner: list[float] = []  # seconds of inner parts, one entry per open part
 
     @contextmanager
     def part(self, name: str):
         start = time.perf_counter()
+        self._inner.append(0.0)
         try:
             yield
         finally:
-            self.seconds[name] += time.perf_counter() - start
+            elapsed = time.perf_counter() - start
+            self.seconds[name] += elapsed - self._inner.pop()
+            if self._inner:
+                self._inner[-1] += elapsed
 
     def summary(self) -> dict[str, float]:
         """Seconds in each part, "rest" (everything else) and "total" since creation."""
