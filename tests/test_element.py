@@ -15,6 +15,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from wrinkle import Mesh, Model, NeoHookean, StVenantKirchhoff, rectangle
+from wrinkle.element import element_stiffness, strain_displacement, unit_tension_stiffness
 from wrinkle.kinematics import deformation_gradient, element_coordinates, right_cauchy_green
 from wrinkle.wrinkling import SLACK, TAUT, WRINKLED
 
@@ -263,3 +264,27 @@ def test_homogeneous_slack_patch_has_no_forces_or_stiffness(material_case):
     assert evaluation.states == (0, 0, 18)
     assert np.all(f == 0.0)
     assert evaluation.stiffness.count_nonzero() == 0
+
+
+def test_unit_tension_stiffness_is_the_dirichlet_energy():
+    """The assembled step metric of the Newton solver: for a displacement field linear in the
+    reference coordinates, u = A X, u.L u = area * |A|^2 (the integral of |grad u|^2), and a
+    rigid translation is in its null space; per element it equals the geometric stiffness of
+    ``element_stiffness`` with N = I and no material part."""
+    mesh = rectangle(2.0, 1.5, 5, 4)
+    model = Model(mesh, StVenantKirchhoff.isotropic(1.0, 0.3, thickness=1.0))
+    L = model.pattern.matrix(model.step_metric())
+    A = np.array([[0.3, -0.7, 0.0], [1.1, 0.4, 0.0], [-0.2, 0.5, 0.0]])
+    u = (mesh.nodes @ A.T).ravel()
+    assert u @ (L @ u) == pytest.approx(3.0 * np.sum(A[:, :2] ** 2), rel=1e-12)
+    translation = np.tile([0.4, -1.0, 2.0], mesh.n_nodes)
+    assert np.abs(L @ translation).max() < 1e-12
+
+    g = model.geometry
+    F = np.zeros((g.n_elements, 3, 2))
+    F[:, :2, :] = np.eye(2)
+    B = strain_displacement(F, g.shape_gradient)
+    geometric = element_stiffness(g.area, B, np.zeros((g.n_elements, 3, 3)), g.shape_gradient,
+                                  np.tile(np.eye(2), (g.n_elements, 1, 1)))
+    np.testing.assert_allclose(unit_tension_stiffness(g.area, g.shape_gradient), geometric,
+                               atol=1e-14)

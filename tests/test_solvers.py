@@ -115,3 +115,77 @@ def test_unsupported_model_is_rejected():
     model.fix(mesh.node_sets["bottom"], "xy")
     with pytest.raises(ValueError, match="do not prevent translation in z, rotation about x, rotation about y"):
         model.solve()
+
+
+def test_newton_regularises_in_the_unit_tension_metric():
+    """The regularised matrix is K + theta (s_K / s_L) L + 1e-3 theta s_K I on the free dofs
+    (s: mean free diagonals, L the model's unit-tension Laplacian), and leaves the constrained
+    rows and columns as the identity; without a metric, K + theta s_K I."""
+    model = sheet_model(TOP_DISPLACEMENT["wrinkled"])
+    problem = model.problem(1.0)
+    u = np.where(model.constrained, problem.prescribed, 0.0)
+    u[~model.constrained] = 1e-3 * np.sin(np.arange(np.count_nonzero(~model.constrained)))
+    ev = problem.evaluate(u)
+    free = problem.free
+    K = ev.stiffness.toarray()
+    L = model.pattern.matrix(model.step_metric()).toarray()
+    s_K = np.mean(np.diag(K)[free])
+    s_L = np.mean(np.diag(L)[free])
+    theta = 0.37
+    solver = make_solver("newton")
+    solver.initial_theta(ev.stiffness, free)
+    expected = K.copy()
+    block = np.ix_(free, free)
+    expected[block] += theta * (s_K / s_L) * L[block] + 1e-3 * theta * s_K * np.eye(free.sum())
+    np.testing.assert_allclose(solver.regularised(ev, theta, free).toarray(), expected,
+                               rtol=1e-14, atol=1e-12 * s_K)
+    ev.metric = None
+    plain = K.copy()
+    plain[block] += theta * s_K * np.eye(free.sum())
+    solver.initial_theta(ev.stiffness, free)
+    np.testing.assert_allclose(solver.regularised(ev, theta, free).toarray(), plain,
+                               rtol=1e-14, atol=1e-12 * s_K)
+
+
+class _Bowl:
+    """Pi(u) = sum(sqrt(1 + u^2)) - f.u: convex, with a curvature that vanishes far out, so
+    that a Newton step from near the bottom can overshoot far up the other side."""
+
+    def __init__(self, f):
+        self.f = np.asarray(f, dtype=float)
+        self.free = np.ones(self.f.size, dtype=bool)
+
+    def evaluate(self, u, stiffness=True):
+        import scipy.sparse as sp
+
+        from wrinkle.solvers import Evaluation
+
+        root = np.sqrt(1.0 + u**2)
+        K = sp.diags(root**-3).tocsr() if stiffness else None
+        return Evaluation(self.f - u / root, float(np.sum(root) - self.f @ u),
+                          float(np.linalg.norm(self.f)), (u.size, 0, 0), K)
+
+
+def test_newton_backtracks_along_a_rejected_step():
+    """A rejected Newton step is shortened to 0.3, then 0.1 of itself, the first that lowers
+    the energy by at least 0.1 of the quadratic model's prediction being taken (no new
+    factorisation); refused when no fraction does."""
+    problem = _Bowl([0.2, -0.1])
+    u = np.array([-3.0, 2.5])
+    ev = problem.evaluate(u)
+    solver = make_solver("newton")
+    solver.initial_theta(ev.stiffness, problem.free)
+    step, _ = solver.trial_step(ev, 1e-12, problem.free)
+    assert solver._use_energy
+    # the full step and 0.3 of it overshoot (energy up); 0.1 of it lowers the energy
+    assert problem.evaluate(u + step).energy > ev.energy
+    assert problem.evaluate(u + 0.3 * step).energy > ev.energy
+    shorter, evaluation = solver.backtrack(problem, u, ev, step)
+    np.testing.assert_allclose(shorter, u + 0.1 * step, rtol=1e-15)
+    model = 0.1 * (ev.residual @ step) - 0.005 * step @ (ev.stiffness @ step)
+    assert ev.energy - evaluation.energy >= 0.1 * model > 0
+    assert evaluation.stiffness is not None
+    assert solver.backtrack(problem, u, ev, -step) is None  # uphill: nothing acceptable
+    # the whole solve converges to Pi's minimum, u = f / sqrt(1 - f^2)
+    result = solver.solve(problem, u)
+    np.testing.assert_allclose(result.u, problem.f / np.sqrt(1 - problem.f**2), rtol=1e-9)

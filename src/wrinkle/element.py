@@ -113,6 +113,20 @@ def element_stiffness(
     return K
 
 
+def unit_tension_stiffness(area: np.ndarray, shape_gradient: np.ndarray) -> np.ndarray:
+    """Geometric stiffness of a unit isotropic tension N = I in the reference configuration,
+    A0 (grad psi_k . grad psi_l) I_3, (m, 9, 9); area (m,), shape_gradient (m, 3, 2).
+
+    Assembled, a discrete Laplacian acting on each displacement component (the H1 seminorm of
+    a displacement field): the metric in which the Newton solver measures its steps.
+    """
+    G = area[:, None, None] * np.matmul(shape_gradient, shape_gradient.transpose(0, 2, 1))
+    K = np.zeros((area.shape[0], 3, 3, 3, 3))
+    for i in range(3):
+        K[:, :, i, :, i] = G
+    return K.reshape(-1, 9, 9)
+
+
 class MembraneElements:
     """All triangles of one material: reference geometry plus the wrinkling material."""
 

@@ -18,7 +18,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from wrinkle.assembly import DOFS_PER_NODE, SparsityPattern
-from wrinkle.element import KERNEL_BLOCK, ElementResult, MembraneElements
+from wrinkle.element import (
+    KERNEL_BLOCK,
+    ElementResult,
+    MembraneElements,
+    unit_tension_stiffness,
+)
 from wrinkle.kinematics import ReferenceGeometry, element_coordinates, reference_geometry
 from wrinkle.loads import (
     boundary_edges,
@@ -97,6 +102,7 @@ class Model:
         self._material_of_element = np.full(n, -1)
         self._materials: list[Wrinkling] = []
         self._groups = None
+        self._step_metric = None
         self.pattern = SparsityPattern(mesh.triangles, mesh.n_nodes)
         self.n_dofs = DOFS_PER_NODE * mesh.n_nodes
         self.constrained = np.zeros(self.n_dofs, dtype=bool)
@@ -190,6 +196,20 @@ class Model:
             per_element = g.area * np.linalg.norm(g.shape_gradient.reshape(-1, 6), axis=1)
             total += (stiffness * np.linalg.norm(per_element)) ** 2
         return float(100 * np.finfo(float).eps * np.sqrt(total))
+
+    def step_metric(self) -> np.ndarray:
+        """CSR data, on ``pattern``, of the unit-tension stiffness (``unit_tension_stiffness``
+        assembled: a Laplacian on each displacement component), (nnz,); computed once."""
+        if self._step_metric is None:
+            g = self.geometry
+            data = np.zeros(self.pattern.nnz)
+            for start in range(0, g.n_elements, KERNEL_BLOCK):
+                block = slice(start, min(start + KERNEL_BLOCK, g.n_elements))
+                self.pattern.add_to_data(
+                    data, block, unit_tension_stiffness(g.area[block], g.shape_gradient[block])
+                )
+            self._step_metric = data
+        return self._step_metric
 
     # -- supports and loads -------------------------------------------------------------
     def _node_indices(self, nodes) -> np.ndarray:
@@ -552,6 +572,9 @@ class StepProblem:
         pattern = model.pattern
         self._constraint_positions = pattern.constraint_positions(model.constrained)
         self._constrained_diagonal = pattern.diagonal[model.constrained]
+        # the solver's step metric, with the constrained rows and columns zeroed
+        self.metric = model.step_metric().copy()
+        self.metric[self._constraint_positions] = 0.0
         self.timer = Stopwatch()  # Model.solve shares one across the steps
 
     def evaluate(self, u: np.ndarray, stiffness: bool = True) -> Evaluation:
@@ -605,7 +628,7 @@ class StepProblem:
                 K = model.pattern.matrix(data)
         return Evaluation(
             residual, energy, scale, counts, K, model.force_round_off, self.symmetric,
-            model.pattern.diagonal,
+            model.pattern.diagonal, self.metric,
         )
 
 

@@ -32,6 +32,9 @@ class Evaluation:
     symmetric: whether the stiffness is symmetric (no follower loads).
     diagonal: (n_dofs,) positions of the diagonal entries in stiffness.data, if the problem
         knows them (its fixed sparsity pattern); found from the matrix otherwise.
+    metric: data, on the stiffness' own sparsity pattern, of a positive semidefinite matrix
+        (zero in constrained rows and columns) in which the Newton solver measures its steps;
+        None for the identity.
     """
 
     residual: np.ndarray
@@ -42,6 +45,7 @@ class Evaluation:
     round_off: float = 0.0
     symmetric: bool = True
     diagonal: np.ndarray | None = None
+    metric: np.ndarray | None = None
 
     @property
     def residual_norm(self) -> float:
@@ -136,7 +140,8 @@ class RegularisedSolver:
     Each iteration solves for a trial step with regularisation theta, compares the actual
     decrease of the merit function with the decrease its local model predicts (gain ratio rho)
     and, as in Fletcher (Practical Methods of Optimization, vol. 1, 1980, section 5.2), accepts
-    the step if rho > 0 and makes theta larger (rho < 0.25) or smaller (rho > 0.75).
+    the step if rho > 0 and makes theta larger (rho < 0.25) or smaller (rho > 0.75). A
+    rejected step is first offered to ``backtrack`` (shorter steps along it, no factorisation).
     Subclasses define ``method``, ``trial_step`` and ``merit`` and the theta rules.
     """
 
@@ -187,6 +192,12 @@ class RegularisedSolver:
 
     def decrease(self, theta: float) -> float: ...
 
+    def backtrack(self, problem: Problem, u: np.ndarray, ev: Evaluation, step: np.ndarray):
+        """After a rejected step: (u, evaluation) of an acceptable point on a shorter step in
+        the same direction, found without a new factorisation, or None (then theta grows and
+        a new step is factorised). None here; a subclass may search."""
+        return
+
     def solve(self, problem: Problem, u0: np.ndarray) -> SolverResult:
         """Solve from u0 (prescribed values already set); raise ConvergenceError if it fails."""
         self._timer = getattr(problem, "timer", None) or Stopwatch()
@@ -215,6 +226,10 @@ class RegularisedSolver:
                 if rho > 0.0:
                     u = u + step
                     ev = trial
+                    break
+                shorter = None if step is None else self.backtrack(problem, u, ev, step)
+                if shorter is not None:
+                    u, ev = shorter
                     break
             else:
                 raise ConvergenceError(

@@ -1,23 +1,48 @@
 """Levenberg-regularised Newton method on the potential energy (the default solver).
 
-Each iteration solves (K + theta I) du = f - f* (METHOD.md section 7) with a sparse direct
-solver (``wrinkle.solvers.linear``) and
-accepts the step by the gain ratio of the potential energy Pi(u) = sum_e A0 w_relaxed - f.u
-(- p V for pressure) against its quadratic model, rho = [Pi(u) - Pi(u + du)] / [r.du -
-du.K.du / 2]. Where the decrease is at the level of round-off in Pi (close to convergence), or
-the loads have no potential, the merit is |f - f*|^2 with its Gauss-Newton model instead. Near the solution
-theta falls to a floor of 1e-14 times the mean diagonal stiffness and the iteration is Newton's,
-converging quadratically with the consistent tangent.
+Each iteration solves (K + theta M) du = f - f* (METHOD.md section 7) with a sparse direct
+solver (``wrinkle.solvers.linear``) and accepts the step by the gain ratio of the potential
+energy Pi(u) = sum_e A0 w_relaxed - f.u (- p V for pressure) against its quadratic model,
+rho = [Pi(u) - Pi(u + du)] / [r.du - du.K.du / 2]. Where the decrease is at the level of
+round-off in Pi (close to convergence), or the loads have no potential, the merit is
+|f - f*|^2 with its Gauss-Newton model instead. Near the solution theta falls to a floor of
+1e-14 and the iteration is Newton's, converging quadratically with the consistent tangent.
+
+The metric M measures the step. With the problem's ``Evaluation.metric`` L (the model gives
+the stiffness of a unit tension, a Laplacian on each displacement component, i.e. the H1
+seminorm of the step), M = (s_K / s_L) L + 1e-3 s_K I, s being mean diagonals; else M = s_K I.
+The identity penalises every nodal motion alike, so that on a fine mesh a theta that tames the
+rough motions of a wrinkled region (which has no stiffness across its wrinkles) freezes the
+smooth, mesh-wide ones; the Laplacian penalises motions by their strain, like the membrane, and
+keeps the number of iterations from growing as fast with the mesh (a trust region in a norm
+that reflects the problem's geometry: Conn, Gould & Toint, Trust-Region Methods, SIAM 2000).
+
+A rejected step is not thrown away: 0.3 and then 0.1 of it are tried (an evaluation without
+stiffness each, far cheaper than a factorisation on a large mesh) and the first that decreases
+the energy by at least 0.1 of its quadratic model's prediction is taken (a sufficient-decrease
+test like Armijo's, Nocedal & Wright, Numerical Optimization, 2006, section 3.1); theta has
+grown all the same. On the inflated
+airbag most rejected steps overshoot in the wrinkled band, and a shortened one is accepted.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
-from wrinkle.solvers.base import Evaluation, RegularisedSolver, shifted, stiffness_scale
+from wrinkle.solvers.base import (
+    Evaluation,
+    RegularisedSolver,
+    shifted,
+    stiffness_scale,
+    try_evaluate,
+)
 
 _THETA_FLOOR = 1e-14
 _ROUND_OFF = 1e-12
+_IDENTITY_SHARE = 1e-3  # share of the identity in the metric M when the problem gives one
+_BACKTRACK = (0.3, 0.1)  # fractions of a rejected step tried before a new factorisation
+_SUFFICIENT = 0.1  # least ratio of actual to predicted energy decrease on a shortened step
 
 
 class RegularisedNewton(RegularisedSolver):
@@ -28,15 +53,29 @@ class RegularisedNewton(RegularisedSolver):
 
     def initial_theta(self, K, free) -> float:
         self._scale = stiffness_scale(K, free)
+        self._metric_scale = None
         return 1e-8
+
+    def regularised(self, ev: Evaluation, theta: float, free: np.ndarray) -> sp.csr_matrix:
+        """K + theta M (module docstring) on K's own pattern."""
+        K = ev.stiffness
+        if ev.metric is None:
+            return shifted(K, theta * self._scale, free, ev.diagonal)
+        if self._metric_scale is None:
+            diagonal = ev.metric[ev.diagonal[free]] if ev.diagonal is not None else \
+                sp.csr_matrix((ev.metric, K.indices, K.indptr), shape=K.shape).diagonal()[free]
+            mean = float(np.mean(diagonal)) if diagonal.size else 0.0
+            self._metric_scale = self._scale / mean if mean > 0.0 else 0.0
+        data = K.data + (theta * self._metric_scale) * ev.metric
+        return shifted(sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape),
+                       _IDENTITY_SHARE * theta * self._scale, free, ev.diagonal)
 
     def trial_step(self, ev: Evaluation, theta: float, free: np.ndarray):
         """Step and the decrease predicted for the merit in use: the potential energy by its
         quadratic model, or (no potential, or a decrease at round-off) |r|^2 by its
         Gauss-Newton model. From a flat membrane under pressure only the energy model sees the
         benefit of moving out of plane (the tangent has no out-of-plane stiffness there)."""
-        solve = self.factorise(shifted(ev.stiffness, theta * self._scale, free, ev.diagonal),
-                               ev.symmetric)
+        solve = self.factorise(self.regularised(ev, theta, free), ev.symmetric)
         if solve is None:
             return None, 0.0
         step = solve(ev.residual)
@@ -56,8 +95,25 @@ class RegularisedNewton(RegularisedSolver):
             return actual / predicted if np.isfinite(actual) else -np.inf
         return (ev.residual_norm**2 - trial.residual_norm**2) / predicted
 
+    def backtrack(self, problem, u: np.ndarray, ev: Evaluation, step: np.ndarray):
+        """Fractions of a rejected step (module docstring): (u, evaluation) or None."""
+        if not self._use_energy:
+            return None
+        slope = float(ev.residual @ step)
+        curvature = float(step @ (ev.stiffness @ step))
+        for fraction in _BACKTRACK:
+            predicted = fraction * slope - 0.5 * fraction**2 * curvature
+            if predicted <= 0.0:
+                continue
+            trial = try_evaluate(problem, u + fraction * step, stiffness=False)
+            if trial is not None and ev.energy - trial.energy >= _SUFFICIENT * predicted:
+                shorter = u + fraction * step
+                evaluation = try_evaluate(problem, shorter)
+                return None if evaluation is None else (shorter, evaluation)
+        return None
+
     def increase(self, theta: float) -> float:
-        return max(10.0 * theta, 1e-10)
+        return max(4.0 * theta, 1e-10)
 
     def decrease(self, theta: float) -> float:
-        return max(0.001 * theta, _THETA_FLOOR)
+        return max(0.1 * theta, _THETA_FLOOR)
