@@ -21,8 +21,8 @@ A rejected step is not thrown away: 0.3 and then 0.1 of it are tried (an evaluat
 stiffness each, far cheaper than a factorisation on a large mesh) and the first that decreases
 the energy by at least 0.1 of its quadratic model's prediction is taken (a sufficient-decrease
 test like Armijo's, Nocedal & Wright, Numerical Optimization, 2006, section 3.1); theta has
-grown all the same. On the inflated
-airbag most rejected steps overshoot in the wrinkled band, and a shortened one is accepted.
+grown all the same. On the inflated airbag most rejected steps overshoot in the wrinkled band,
+and a shortened one is accepted.
 """
 
 from __future__ import annotations
