@@ -124,6 +124,7 @@ def main() -> None:
     for problem in args.problems:
         for n in args.sizes or SIZES[problem]:
             if 2 * n * n > args.max_elements:
+                print(f"{problem:>13} n = {n}: skipped, {2 * n * n} elements > --max-elements")
                 continue
             command = [sys.executable, __file__, "--one", problem, str(n),
                        "--linear-solver", args.linear_solver]
