@@ -99,6 +99,13 @@ def element_stiffness(
     ``out``: optional (n, 9, 9) array to write into.
     """
     K = np.matmul(B.transpose(0, 2, 1), np.matmul(tangent * area[:, None, None], B), out=out)
+    return add_geometric_stiffness(K, area, shape_gradient, stress)
+
+
+def add_geometric_stiffness(K: np.ndarray, area: np.ndarray, shape_gradient: np.ndarray,
+                            stress: np.ndarray) -> np.ndarray:
+    """K += A0 G (x) I3 in place, G_kl = grad psi_k . N grad psi_l: the geometric
+    (initial-stress) stiffness of the stress resultant N, (m, 2, 2); K (m, 9, 9), returned."""
     N00, N11, N01 = area * stress[:, 0, 0], area * stress[:, 1, 1], area * stress[:, 0, 1]
     for k in range(3):
         gk0, gk1 = shape_gradient[:, k, 0], shape_gradient[:, k, 1]
@@ -120,11 +127,9 @@ def unit_tension_stiffness(area: np.ndarray, shape_gradient: np.ndarray) -> np.n
     Assembled, a discrete Laplacian acting on each displacement component (the H1 seminorm of
     a displacement field): the metric in which the Newton solver measures its steps.
     """
-    G = area[:, None, None] * np.matmul(shape_gradient, shape_gradient.transpose(0, 2, 1))
-    K = np.zeros((area.shape[0], 3, 3, 3, 3))
-    for i in range(3):
-        K[:, :, i, :, i] = G
-    return K.reshape(-1, 9, 9)
+    m = area.shape[0]
+    return add_geometric_stiffness(np.zeros((m, 9, 9)), area, shape_gradient,
+                                   np.broadcast_to(np.eye(2), (m, 2, 2)))
 
 
 class MembraneElements:

@@ -37,6 +37,7 @@ from wrinkle.solvers.base import (
     stiffness_scale,
     try_evaluate,
 )
+from wrinkle.solvers.linear import diagonal_positions
 
 _THETA_FLOOR = 1e-14
 _ROUND_OFF = 1e-12
@@ -62,8 +63,8 @@ class RegularisedNewton(RegularisedSolver):
         if ev.metric is None:
             return shifted(K, theta * self._scale, free, ev.diagonal)
         if self._metric_scale is None:
-            diagonal = ev.metric[ev.diagonal[free]] if ev.diagonal is not None else \
-                sp.csr_matrix((ev.metric, K.indices, K.indptr), shape=K.shape).diagonal()[free]
+            positions = ev.diagonal if ev.diagonal is not None else diagonal_positions(K)
+            diagonal = ev.metric[positions[free]]
             mean = float(np.mean(diagonal)) if diagonal.size else 0.0
             self._metric_scale = self._scale / mean if mean > 0.0 else 0.0
         data = K.data + (theta * self._metric_scale) * ev.metric
