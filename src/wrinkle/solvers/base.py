@@ -9,7 +9,7 @@ from typing import Protocol
 import numpy as np
 import scipy.sparse as sp
 
-from wrinkle.solvers.linear import diagonal_positions, make_linear_solver
+from wrinkle.solvers.linear import SymmetryCheck, diagonal_positions, make_linear_solver
 from wrinkle.timing import LINEAR, Stopwatch
 
 logger = logging.getLogger("wrinkle.solver")
@@ -161,15 +161,20 @@ class RegularisedSolver:
         self.max_iterations = int(max_iterations)
         self.linear_solver = linear_solver
         self.linear = None  # the back-end, made at the first solve (it depends on the size)
+        self._is_symmetric = SymmetryCheck()
         self._timer = Stopwatch()
 
     def factorise(self, A: sp.csr_matrix, symmetric: bool):
         """Solve function of the linear back-end for A (None if A is singular); the time of
-        both goes to the problem's stopwatch."""
+        both goes to the problem's stopwatch. A matrix not known to be symmetric is checked
+        (``SymmetryCheck``): the assembled tangent under follower pressure often is (the
+        airbag's, to round-off), and the back-ends factorise symmetric matrices faster."""
         if self.linear is None:
             self.linear = make_linear_solver(self.linear_solver, A.shape[0])
         timer = self._timer
         with timer.part(LINEAR):
+            if not symmetric and not np.iscomplexobj(A.data):
+                symmetric = self._is_symmetric(A)
             solve = self.linear.factorise(A, symmetric)
         if solve is None:
             return None

@@ -8,6 +8,8 @@ positions of the diagonal) and factorises only the values again.
 - ``superlu``: SciPy's SuperLU, always available; real or complex; the fallback.
 - ``pardiso``: Intel MKL PARDISO through ``pypardiso`` (extra ``fast``), real matrices, nested
   dissection ordering, two threads; the ordering is reused while the pattern is unchanged.
+  A symmetric matrix is factorised as symmetric indefinite (LDL^T of its upper triangle), about
+  half the time and memory of the LU used otherwise (``benchmarks/linear_solvers.py``).
 - ``cholmod``: CHOLMOD supernodal Cholesky through ``scikit-sparse``, symmetric positive
   definite matrices only (an indefinite K + shift I is reported as singular, so the
   regulariser grows until it is positive definite).
@@ -71,16 +73,56 @@ class _PatternCache:
         return False
 
 
+class SymmetryCheck:
+    """Whether matrices on one structurally symmetric CSR pattern (sorted indices) are
+    symmetric: the position in ``data`` of each entry's transpose, found once per pattern."""
+
+    def __init__(self):
+        self._pattern = _PatternCache()
+        self._transpose = None
+
+    def __call__(self, A: sp.csr_matrix, relative_tolerance: float = 1e-12) -> bool:
+        """|A - A^T| <= relative_tolerance |A| (Frobenius norms); False for a pattern that
+        is not structurally symmetric."""
+        if not self._pattern.same(A):
+            nnz = A.nnz
+            index = np.int32 if nnz < np.iinfo(np.int32).max else np.int64
+            positions = sp.csr_matrix((np.arange(1, nnz + 1, dtype=index), A.indices,
+                                       A.indptr), shape=A.shape).T.tocsr()
+            positions.sort_indices()
+            same = (np.array_equal(positions.indptr, A.indptr)
+                    and np.array_equal(positions.indices, A.indices))
+            self._transpose = positions.data - 1 if same else None
+        if self._transpose is None:
+            return False
+        return bool(np.linalg.norm(A.data - A.data[self._transpose])
+                    <= relative_tolerance * np.linalg.norm(A.data))
+
+
+def upper_triangle_positions(A: sp.csr_matrix):
+    """(positions in A.data, indptr, indices) of the upper triangle of A, diagonal included,
+    as a CSR pattern; A has sorted indices."""
+    n = A.shape[0]
+    rows = np.repeat(np.arange(n), np.diff(A.indptr))
+    positions = np.flatnonzero(A.indices >= rows)
+    indptr = np.concatenate(([0], np.cumsum(np.bincount(rows[positions], minlength=n))))
+    return positions, indptr.astype(A.indptr.dtype), A.indices[positions]
+
+
 class Pardiso:
-    """MKL PARDISO (real, structurally symmetric: matrix type 1); ordering reused."""
+    """MKL PARDISO: real symmetric indefinite (matrix type -2, upper triangle) when the caller
+    says the matrix is symmetric, else real structurally symmetric (type 1); each type's
+    ordering and symbolic factorisation are reused while the pattern is unchanged."""
 
     name = "pardiso"
 
     def __init__(self):
         import pypardiso
 
-        self._solver = pypardiso.PyPardisoSolver(mtype=1)
-        self._pattern = _PatternCache()
+        self._solvers = {mtype: pypardiso.PyPardisoSolver(mtype=mtype) for mtype in (1, -2)}
+        self._analysed = {mtype: _PatternCache() for mtype in (1, -2)}
+        self._upper = None  # upper_triangle_positions of the pattern in _upper_pattern
+        self._upper_pattern = _PatternCache()
         self._fallback = SuperLU()
 
     def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
@@ -89,22 +131,28 @@ class Pardiso:
         from pypardiso.pardiso_wrapper import PyPardisoError
 
         A = A if A.has_sorted_indices else A.sorted_indices()
-        solver = self._solver
+        M, mtype = A, 1
+        if symmetric:
+            if not self._upper_pattern.same(A):
+                self._upper = upper_triangle_positions(A)
+            positions, indptr, indices = self._upper
+            M, mtype = sp.csr_matrix((A.data[positions], indices, indptr), shape=A.shape), -2
+        solver = self._solvers[mtype]
         rhs = np.zeros((A.shape[0], 1))
         try:
-            if not self._pattern.same(A):
+            if not self._analysed[mtype].same(A):
                 solver.set_phase(11)  # ordering and symbolic factorisation
-                solver._call_pardiso(A, rhs)
+                solver._call_pardiso(M, rhs)
             solver.set_phase(22)  # numerical factorisation only
-            solver._call_pardiso(A, rhs)
+            solver._call_pardiso(M, rhs)
         except PyPardisoError as error:
             logger.debug("PARDISO factorisation failed: %s", error)
-            self._pattern = _PatternCache()
+            self._analysed[mtype] = _PatternCache()
             return None
 
         def solve(b: np.ndarray) -> np.ndarray:
             solver.set_phase(33)
-            return solver._call_pardiso(A, np.asfortranarray(b[:, None]))[:, 0]
+            return solver._call_pardiso(M, np.asfortranarray(b[:, None]))[:, 0]
 
         return solve
 
