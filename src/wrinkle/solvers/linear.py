@@ -8,8 +8,9 @@ positions of the diagonal) and factorises only the values again.
 - ``superlu``: SciPy's SuperLU, always available; real or complex; the fallback.
 - ``pardiso``: Intel MKL PARDISO through ``pypardiso`` (extra ``fast``), real matrices, nested
   dissection ordering, two threads; the ordering is reused while the pattern is unchanged.
-  A symmetric matrix is factorised as symmetric indefinite (LDL^T of its upper triangle), about
-  half the time and memory of the LU used otherwise (``benchmarks/linear_solvers.py``).
+  A symmetric matrix is factorised as symmetric indefinite (LDL^T of its upper triangle): on the
+  airbag's tangent 0.5-0.9 of the time and 0.6 of the memory of the LU used otherwise
+  (``benchmarks/linear_solvers.py``).
 - ``cholmod``: CHOLMOD supernodal Cholesky through ``scikit-sparse``, symmetric positive
   definite matrices only (an indefinite K + shift I is reported as singular, so the
   regulariser grows until it is positive definite).
