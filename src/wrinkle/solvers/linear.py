@@ -104,7 +104,7 @@ def upper_triangle_positions(A: sp.csr_matrix):
     """(positions in A.data, indptr, indices) of the upper triangle of A, diagonal included,
     as a CSR pattern; A has sorted indices."""
     n = A.shape[0]
-    rows = np.repeat(np.arange(n), np.diff(A.indptr))
+    rows = _row_indices(A)
     positions = np.flatnonzero(A.indices >= rows)
     indptr = np.concatenate(([0], np.cumsum(np.bincount(rows[positions], minlength=n))))
     return positions, indptr.astype(A.indptr.dtype), A.indices[positions]
@@ -245,8 +245,12 @@ def make_linear_solver(name: str = "auto", n_dofs: int = 0):
 
 def diagonal_positions(A: sp.csr_matrix) -> np.ndarray:
     """Index into A.data of each diagonal entry (n,); every diagonal entry must be stored."""
-    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
-    positions = np.flatnonzero(rows == A.indices)
+    positions = np.flatnonzero(_row_indices(A) == A.indices)
     if positions.size != A.shape[0]:
         raise ValueError("the sparsity pattern lacks diagonal entries")
     return positions
+
+
+def _row_indices(A: sp.csr_matrix) -> np.ndarray:
+    """Row of each stored entry of the CSR matrix A, (nnz,)."""
+    return np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))

@@ -84,7 +84,9 @@ class RegularisedNewton(RegularisedSolver):
             return None, 0.0
         r = ev.residual
         K_step = ev.stiffness @ step
-        energy_model = float(r @ step - 0.5 * step @ K_step)
+        # the energy model along the step, r.du and du.K.du, kept for ``backtrack``
+        self._slope, self._curvature = float(r @ step), float(step @ K_step)
+        energy_model = self._slope - 0.5 * self._curvature
         self._use_energy = np.isfinite(ev.energy) and energy_model > _ROUND_OFF * abs(ev.energy)
         if self._use_energy:
             return step, energy_model
@@ -100,15 +102,13 @@ class RegularisedNewton(RegularisedSolver):
         """Fractions of a rejected step (module docstring): (u, evaluation) or None."""
         if not self._use_energy:
             return None
-        slope = float(ev.residual @ step)
-        curvature = float(step @ (ev.stiffness @ step))
         for fraction in _BACKTRACK:
-            predicted = fraction * slope - 0.5 * fraction**2 * curvature
+            predicted = fraction * self._slope - 0.5 * fraction**2 * self._curvature
             if predicted <= 0.0:
                 continue
-            trial = try_evaluate(problem, u + fraction * step, stiffness=False)
+            shorter = u + fraction * step
+            trial = try_evaluate(problem, shorter, stiffness=False)
             if trial is not None and ev.energy - trial.energy >= _SUFFICIENT * predicted:
-                shorter = u + fraction * step
                 evaluation = try_evaluate(problem, shorter)
                 return None if evaluation is None else (shorter, evaluation)
         return None
