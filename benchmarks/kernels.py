@@ -5,12 +5,15 @@ leaves part of the membrane taut, part wrinkled and part slack, the script times
 
 1. ``MembraneElements.evaluate``: nodal forces and stiffness of all elements, with wrinkling;
 2. the same, forces only (``stiffness=False``);
-3. assembly of the element stiffness data and force vector through ``SparsityPattern``;
+3. assembly of the element stiffness data (block by block, ``add_to_data``, as a solve does)
+   and of the force vector through ``SparsityPattern``;
 4. construction of the ``SparsityPattern`` (done once per model),
 
 and prints the medians of ``--repeat`` runs (wall clock, and user CPU time, which is less
 sensitive to the load of a shared machine), the time per element and the peak resident memory.
-Each mesh size runs in a fresh subprocess, so that the peak RSS belongs to that size alone.
+Each mesh size runs in a fresh subprocess, so that the peak RSS belongs to that size alone,
+once with the NumPy kernels and once with the compiled ones (``wrinkle.compiled``, Numba;
+WRINKLE_NUMBA=0 / 1) if Numba is installed; compilation happens in the warm-up run, untimed.
 
 NumPy runs single-threaded: OMP_NUM_THREADS, OPENBLAS_NUM_THREADS and MKL_NUM_THREADS are set to
 1 before NumPy is imported (here and in the subprocesses).
@@ -18,6 +21,7 @@ NumPy runs single-threaded: OMP_NUM_THREADS, OPENBLAS_NUM_THREADS and MKL_NUM_TH
 Usage::
 
     python benchmarks/kernels.py --sizes 1e4 1e5 1e6 --repeat 3 --material ti
+    python benchmarks/kernels.py --kernels numpy      # NumPy only
 """
 
 from __future__ import annotations
@@ -36,8 +40,9 @@ import time
 
 import numpy as np
 
+from wrinkle import compiled
 from wrinkle.assembly import SparsityPattern
-from wrinkle.element import MembraneElements
+from wrinkle.element import KERNEL_BLOCK, MembraneElements
 from wrinkle.kinematics import element_coordinates, reference_geometry
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.mesh import Mesh, rectangle
@@ -145,14 +150,20 @@ def run_size(n_elements: float, material: str, repeat: int) -> dict:
     pattern = SparsityPattern(mesh.triangles, mesh.n_nodes)
     t_pattern = time.perf_counter() - start
 
-    def assemble():
-        holder["data"] = pattern.assemble_data(stiffness)
+    def assemble():  # block by block, as StepProblem.evaluate assembles
+        data = np.zeros(pattern.nnz)
+        for start in range(0, mesh.n_elements, KERNEL_BLOCK):
+            block = slice(start, min(start + KERNEL_BLOCK, mesh.n_elements))
+            pattern.add_to_data(data, block, stiffness[block])
+        holder["data"] = data
         holder["vector"] = pattern.assemble_vector(forces)
 
+    assemble()  # warm-up (compiles the scatter)
     t_assemble, _ = _median_time(assemble, repeat)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # Linux: KiB
     return {
         "elements": int(mesh.n_elements),
+        "kernels": "numba" if compiled.enabled(mesh.n_elements) else "numpy",
         **counts,
         "evaluate": t_evaluate,
         "evaluate_user": user_evaluate,
@@ -175,15 +186,19 @@ def print_table(rows: list[dict], material: str, repeat: int) -> None:
     print(f"material: {material}: {MATERIALS[material]}")
     print(
         f"numpy {np.__version__}, single-threaded (OMP_NUM_THREADS=OPENBLAS_NUM_THREADS="
-        f"MKL_NUM_THREADS=1), median of {repeat} run(s); one subprocess per size"
+        f"MKL_NUM_THREADS=1), median of {repeat} run(s); one subprocess per size and kernels"
     )
+    if compiled.installed():
+        from importlib.metadata import version
+
+        print(f"numba {version('numba')} (kernels 'numba': wrinkle.compiled, on every size)")
     print(
         "(1) evaluate forces + stiffness with wrinkling, (2) forces only, "
         "(3) assemble stiffness data + force vector, (4) build SparsityPattern (once);"
     )
     print("wall-clock seconds, microseconds per element, and user-CPU seconds ('user')")
     header = (
-        f"{'elements':>9} {'taut':>8} {'wrinkled':>8} {'slack':>8} | "
+        f"{'elements':>9} {'kernels':>7} {'taut':>8} {'wrinkled':>8} {'slack':>8} | "
         f"{'(1) K+f s':>9} {'us/el':>6} {'user':>6} | {'(2) f s':>8} {'us/el':>6} {'user':>6} | "
         f"{'(3) asm s':>9} {'us/el':>6} | {'(4) patt s':>10} | {'peak RSS MB':>11}"
     )
@@ -192,7 +207,7 @@ def print_table(rows: list[dict], material: str, repeat: int) -> None:
     for r in rows:
         n = r["elements"]
         print(
-            f"{n:>9d} {r['taut']:>8d} {r['wrinkled']:>8d} {r['slack']:>8d} | "
+            f"{n:>9d} {r['kernels']:>7} {r['taut']:>8d} {r['wrinkled']:>8d} {r['slack']:>8d} | "
             f"{r['evaluate']:>9.4f} {1e6 * r['evaluate'] / n:>6.2f} {r['evaluate_user']:>6.2f} | "
             f"{r['forces']:>8.4f} {1e6 * r['forces'] / n:>6.2f} {r['forces_user']:>6.2f} | "
             f"{r['assemble']:>9.4f} {1e6 * r['assemble'] / n:>6.2f} | "
@@ -220,6 +235,13 @@ def main(argv: list[str] | None = None) -> None:
         "iso: isotropic St Venant-Kirchhoff; neo / neo-c: incompressible / "
         "compressible neo-Hookean",
     )
+    parser.add_argument(
+        "--kernels",
+        nargs="+",
+        choices=["numpy", "numba"],
+        default=["numpy", "numba"] if compiled.installed() else ["numpy"],
+        help="element and scatter kernels to time (default: both if Numba is installed)",
+    )
     parser.add_argument("--json", action="store_true", help="print the rows as JSON as well")
     parser.add_argument("--single", type=_parse_size, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -230,8 +252,10 @@ def main(argv: list[str] | None = None) -> None:
         print(json.dumps(run_size(args.single, args.material, args.repeat)))
         return
 
+    if "numba" in args.kernels and not compiled.installed():
+        parser.error("--kernels numba: numba is not installed (pip install numba)")
     rows = []
-    for size in args.sizes:
+    for size, kernels in ((size, kernels) for size in args.sizes for kernels in args.kernels):
         command = [
             sys.executable,
             os.path.abspath(__file__),
@@ -242,10 +266,12 @@ def main(argv: list[str] | None = None) -> None:
             "--material",
             args.material,
         ]
-        completed = subprocess.run(command, capture_output=True, text=True, check=False)
+        environment = {**os.environ, "WRINKLE_NUMBA": "1" if kernels == "numba" else "0"}
+        completed = subprocess.run(command, capture_output=True, text=True, check=False,
+                                   env=environment)
         if completed.returncode != 0:
             sys.stderr.write(completed.stderr)
-            raise SystemExit(f"benchmark of size {size:g} failed")
+            raise SystemExit(f"benchmark of size {size:g} ({kernels}) failed")
         rows.append(json.loads(completed.stdout.strip().splitlines()[-1]))
     print_table(rows, args.material, args.repeat)
     if args.json:

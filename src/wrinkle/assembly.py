@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from wrinkle import compiled
+
 DOFS_PER_NODE = 3
 
 
@@ -39,6 +41,7 @@ class SparsityPattern:
     def __init__(self, triangles: np.ndarray, n_nodes: int):
         triangles = np.asarray(triangles, dtype=np.int64)
         n = triangles.shape[0]
+        self.n_elements = n
         self.n_nodes = n_nodes
         self.n_dofs = DOFS_PER_NODE * n_nodes
         self.element_dofs = (
@@ -113,7 +116,11 @@ class SparsityPattern:
         One bincount over the span of data positions the elements touch: for a mesh numbered
         so that neighbouring elements have nearby nodes (gmsh, the generators) a block of
         elements touches a short span; otherwise ``np.add.at``, slower but with the same sums.
+        With Numba on a large mesh (``wrinkle.compiled.enabled``), a compiled loop instead.
         """
+        if compiled.enabled(self.n_elements):
+            compiled.scatter_add(data, self.element_to_data[elements], element_matrices)
+            return
         positions = self.element_to_data[elements].ravel()
         weights = element_matrices.ravel()
         first, last = int(positions.min()), int(positions.max())

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wrinkle import compiled
 from wrinkle.kinematics import ReferenceGeometry, deformation_gradient, right_cauchy_green
 from wrinkle.wrinkling import Wrinkling, WrinklingError, WrinklingResponse
 
@@ -212,9 +213,13 @@ class MembraneElements:
             F_sub, stress = F[sub], response.stress[sub]
             _nodal_forces(area, F_sub, grad, stress, forces[sub])
             if stiffness:
-                B = strain_displacement(F_sub, grad)
                 out = K[:sub.stop - sub.start] if sink else K[sub]
-                element_stiffness(area, B, response.tangent[sub], grad, stress, out=out)
+                if compiled.enabled(g.n_elements):
+                    compiled.element_stiffness(area, F_sub, grad, response.tangent[sub], stress,
+                                               out)
+                else:
+                    B = strain_displacement(F_sub, grad)
+                    element_stiffness(area, B, response.tangent[sub], grad, stress, out=out)
                 if sink:
                     sink(mesh_sub, out)
         return forces, K if stiffness and not sink else None
