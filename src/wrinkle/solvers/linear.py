@@ -23,7 +23,9 @@ SuperLU otherwise.
 
 from __future__ import annotations
 
+import importlib.metadata
 import logging
+import os
 from collections.abc import Callable
 
 import numpy as np
@@ -63,8 +65,13 @@ class _PatternCache:
 
     def __init__(self):
         self._indptr = self._indices = None
+        self._source_indptr = self._source_indices = None
 
     def same(self, A: sp.csr_matrix) -> bool:
+        # the model's pattern arrays are never changed in place: the same objects, same pattern
+        if A.indptr is self._source_indptr and A.indices is self._source_indices:
+            return True
+        self._source_indptr, self._source_indices = A.indptr, A.indices
         if self._indptr is not None and self._indptr.shape == A.indptr.shape \
                 and self._indices.shape == A.indices.shape \
                 and np.array_equal(self._indptr, A.indptr) \
@@ -110,6 +117,23 @@ def upper_triangle_positions(A: sp.csr_matrix):
     return positions, indptr.astype(A.indptr.dtype), A.indices[positions]
 
 
+def _locate_mkl_runtime() -> None:
+    """Set PYPARDISO_MKL_RT, unless set, to MKL's runtime library in the file list of the
+    installed ``mkl`` package: pypardiso otherwise looks for it with ``find_library`` and then
+    searches the whole lib directory of the environment, at import and for every solver it
+    makes (about 1 s each in a large environment)."""
+    if "PYPARDISO_MKL_RT" in os.environ:
+        return
+    try:
+        files = importlib.metadata.distribution("mkl").files or []
+    except importlib.metadata.PackageNotFoundError:
+        return
+    libraries = sorted((str(f.locate()) for f in files if f.name.startswith("libmkl_rt")), key=len)
+    found = [path for path in libraries if os.path.exists(path)]
+    if found:
+        os.environ["PYPARDISO_MKL_RT"] = found[0]
+
+
 class Pardiso:
     """MKL PARDISO: real symmetric indefinite (matrix type -2, upper triangle) when the caller
     says the matrix is symmetric, else real structurally symmetric (type 1); each type's
@@ -118,6 +142,7 @@ class Pardiso:
     name = "pardiso"
 
     def __init__(self):
+        _locate_mkl_runtime()
         import pypardiso
 
         self._solvers = {mtype: pypardiso.PyPardisoSolver(mtype=mtype) for mtype in (1, -2)}

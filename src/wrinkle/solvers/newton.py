@@ -62,14 +62,14 @@ class RegularisedNewton(RegularisedSolver):
         K = ev.stiffness
         if ev.metric is None:
             return shifted(K, theta * self._scale, free, ev.diagonal)
+        positions = ev.diagonal if ev.diagonal is not None else diagonal_positions(K)
         if self._metric_scale is None:
-            positions = ev.diagonal if ev.diagonal is not None else diagonal_positions(K)
             diagonal = ev.metric[positions[free]]
             mean = float(np.mean(diagonal)) if diagonal.size else 0.0
             self._metric_scale = self._scale / mean if mean > 0.0 else 0.0
         data = K.data + (theta * self._metric_scale) * ev.metric
-        return shifted(sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape),
-                       _IDENTITY_SHARE * theta * self._scale, free, ev.diagonal)
+        data[positions[free]] += _IDENTITY_SHARE * theta * self._scale
+        return sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
 
     def trial_step(self, ev: Evaluation, theta: float, free: np.ndarray):
         """Step and the decrease predicted for the merit in use: the potential energy by its
