@@ -109,6 +109,47 @@ def test_load_stepping_cuts_back_and_reports_failure():
     assert results.final.states[1] > 0
 
 
+def homogeneous_square(nx=6):
+    """Unit square whose whole boundary follows x = X + 0.1 Y, y = 1.1 Y (the paper's
+    shear-stretch path, f = 5, fibres along X): the solution is that homogeneous map at every
+    load factor, linear in it (Roddeman et al. 1987, Part II, section 6)."""
+    mesh = wrinkle.rectangle(1.0, 1.0, nx, nx)
+    model = wrinkle.Model(mesh, ANISOTROPIC)
+    X = mesh.nodes
+    boundary = np.flatnonzero((X[:, 0] % 1.0 == 0.0) | (X[:, 1] % 1.0 == 0.0))
+    model.prescribe(boundary, np.column_stack([0.1 * X[boundary, 1], 0.1 * X[boundary, 1],
+                                               np.zeros(boundary.size)]))
+    homogeneous = np.column_stack([0.1 * X[:, 1], 0.1 * X[:, 1], np.zeros(len(X))]).ravel()
+    return model, homogeneous
+
+
+def test_load_steps_start_from_the_extrapolated_state():
+    """On a path whose solution is linear in the load factor, the extrapolation of the first
+    step (from the start at factor 0) is the solution of every later step: no iterations."""
+    model, homogeneous = homogeneous_square()
+    results = model.solve(steps=5, tolerance=1e-10)
+    iterations = [step.iterations for step in results.steps]
+    assert iterations[0] > 0 and iterations[1:] == [0, 0, 0, 0], iterations
+    for step in results.steps:
+        np.testing.assert_allclose(step.displacement, step.load_factor * homogeneous,
+                                   atol=1e-10)
+
+
+def test_a_worse_prediction_is_not_used():
+    """solve_step keeps the plain start when the predicted state is further from balance."""
+    model, homogeneous = homogeneous_square()
+    solver = make_solver("newton", tolerance=1e-10)
+    u_half, _ = model.solve_step(np.zeros(model.n_dofs), 0.5, solver)
+    _, plain = model.solve_step(u_half, 1.0, solver)
+    bad = u_half + np.random.default_rng(0).normal(scale=0.02, size=model.n_dofs)
+    u, predicted = model.solve_step(u_half, 1.0, solver, predicted=bad)
+    assert predicted.iterations == plain.iterations > 0
+    good = 2.0 * u_half
+    _, extrapolated = model.solve_step(u_half, 1.0, solver, predicted=good)
+    assert extrapolated.iterations == 0
+    np.testing.assert_allclose(u, homogeneous, atol=1e-10)
+
+
 def test_unsupported_model_is_rejected():
     mesh = wrinkle.rectangle(1.0, 1.0, 2, 2)
     model = wrinkle.Model(mesh, ANISOTROPIC)

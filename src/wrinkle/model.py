@@ -36,7 +36,7 @@ from wrinkle.loads import (
 from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh
 from wrinkle.solvers import ConvergenceError, make_solver
-from wrinkle.solvers.base import Evaluation, EvaluationFailure
+from wrinkle.solvers.base import Evaluation, EvaluationFailure, try_evaluate
 from wrinkle.timing import ASSEMBLY, ELEMENTS, Stopwatch
 from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, Wrinkling, WrinklingError
 
@@ -467,7 +467,9 @@ class Model:
 
         ``steps`` equal increments of the load factor are the aim (default 1); a step that
         fails is cut in half (down to ``min_step``, default 1e-4) and the increment grows again
-        after easy steps (at most back to 1/steps). ``method`` "newton" (default) or
+        after easy steps (at most back to 1/steps). From the second step on, a step starts from
+        the linear extrapolation of the last two converged states (u0 being the state at load
+        factor 0) where that is closer to balance than the last one (``solve_step``). ``method`` "newton" (default) or
         "restricted-step"; ``tolerance`` on the residual force relative to the applied and
         reaction forces (default 1e-6); ``max_iterations`` per step (default: the method's);
         ``linear_solver`` "auto" (default), "superlu", "pardiso", "cholmod" or "amg"
@@ -494,10 +496,17 @@ class Model:
         target = 1.0 / steps
         increment = target
         factor = 0.0
+        previous = None  # (load factor, displacements) of the converged state before the last
         while factor < 1.0 - 1e-12:
             trial_factor = min(1.0, factor + increment)
+            predicted = None
+            if previous is not None:  # linear extrapolation from the last two converged steps
+                previous_factor, previous_u = previous
+                ratio = (trial_factor - factor) / (factor - previous_factor)
+                predicted = u + ratio * (u - previous_u)
             try:
-                u, solved = self.solve_step(u, trial_factor, solver, timer=timer)
+                converged_u, solved = self.solve_step(u, trial_factor, solver, timer=timer,
+                                                      predicted=predicted)
             except ConvergenceError as error:
                 if increment / 2 < min_step:
                     failure = ConvergenceError(
@@ -510,7 +519,8 @@ class Model:
                 increment /= 2
                 logger.info("step to %.6g failed; increment cut to %.4g", trial_factor, increment)
                 continue
-            factor = trial_factor
+            previous = (factor, u)
+            factor, u = trial_factor, converged_u
             step = results.append(factor, u, solved)
             logger.info(
                 "load factor %.6g converged in %d iterations", factor, solved.iterations
@@ -522,13 +532,24 @@ class Model:
         return results
 
     def solve_step(self, u: np.ndarray, load_factor: float, solver, prescribed=None,
-                   timer: Stopwatch | None = None):
+                   timer: Stopwatch | None = None, predicted: np.ndarray | None = None):
         """Solve one load level from the displacements u; returns (u, SolverResult). ``timer``
-        accumulates the time of its parts."""
+        accumulates the time of its parts. ``predicted``: a guess of the solution, (n_dofs,),
+        such as ``Model.solve``'s extrapolation from the previous steps; the solve starts from
+        it instead of u if its out-of-balance force is smaller (two evaluations of the forces)."""
         problem = self.problem(load_factor, prescribed)
         if timer is not None:
             problem.timer = timer
         start = np.where(self.constrained, problem.prescribed, u)
+        if predicted is not None:
+            guess = np.where(self.constrained, problem.prescribed, predicted)
+            at_guess = try_evaluate(problem, guess, stiffness=False)
+            if at_guess is not None:
+                at_start = try_evaluate(problem, start, stiffness=False)
+                if at_start is None or at_guess.residual_norm < at_start.residual_norm:
+                    logger.info("load factor %.6g starts from the extrapolated displacements",
+                                load_factor)
+                    start = guess
         solved = solver.solve(problem, start)
         return solved.u, solved
 
