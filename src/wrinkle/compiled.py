@@ -112,6 +112,5 @@ def element_stiffness(area: np.ndarray, F: np.ndarray, shape_gradient: np.ndarra
 def scatter_add(data: np.ndarray, positions: np.ndarray, matrices: np.ndarray) -> None:
     """data[positions[e, q]] += matrices[e].ravel()[q] in place; positions (m, 81) CSR data
     indices, matrices (m, 9, 9); repeated positions are summed."""
-    m = positions.shape[0]
-    _compiled("scatter_add")(data, np.ascontiguousarray(positions),
-                 np.ascontiguousarray(matrices).reshape(m, positions.shape[1]))
+    values = np.ascontiguousarray(matrices).reshape(positions.shape[0], positions.shape[1])
+    _compiled("scatter_add")(data, np.ascontiguousarray(positions), values)

@@ -469,11 +469,11 @@ class Model:
         fails is cut in half (down to ``min_step``, default 1e-4) and the increment grows again
         after easy steps (at most back to 1/steps). From the second step on, a step starts from
         the linear extrapolation of the last two converged states (u0 being the state at load
-        factor 0) where that is closer to balance than the last one (``solve_step``). ``method`` "newton" (default) or
-        "restricted-step"; ``tolerance`` on the residual force relative to the applied and
-        reaction forces (default 1e-6); ``max_iterations`` per step (default: the method's);
-        ``linear_solver`` "auto" (default), "superlu", "pardiso", "cholmod" or "amg"
-        (``wrinkle.solvers.linear``).
+        factor 0) where that is closer to balance than the last one (``solve_step``).
+        ``method`` "newton" (default) or "restricted-step"; ``tolerance`` on the residual
+        force relative to the applied and reaction forces (default 1e-6); ``max_iterations``
+        per step (default: the method's); ``linear_solver`` "auto" (default), "superlu",
+        "pardiso", "cholmod" or "amg" (``wrinkle.solvers.linear``).
         Arguments left None take ``solver_settings`` (from a case file), then the defaults.
         ``on_step(step_result)`` is called after each converged step. Raises
         ConvergenceError, with the converged steps in its ``results`` attribute, if a step
@@ -500,7 +500,7 @@ class Model:
         while factor < 1.0 - 1e-12:
             trial_factor = min(1.0, factor + increment)
             predicted = None
-            if previous is not None:  # linear extrapolation from the last two converged steps
+            if previous is not None:  # linear extrapolation from the last two converged states
                 previous_factor, previous_u = previous
                 ratio = (trial_factor - factor) / (factor - previous_factor)
                 predicted = u + ratio * (u - previous_u)
