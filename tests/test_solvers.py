@@ -7,6 +7,7 @@ import pytest
 import wrinkle
 from wrinkle.materials import StVenantKirchhoff
 from wrinkle.solvers import ConvergenceError, make_solver
+from wrinkle.wrinkling import TAUT
 
 ANISOTROPIC = StVenantKirchhoff.transversely_isotropic(
     E_L=5.0, E_T=1.0, nu_LT=0.3, nu_TT=0.3, G_LT=1 / 2.6, thickness=1.0
@@ -25,9 +26,11 @@ def sheet_model(top_displacement, nx=6):
 
 
 def solve_history(model, method="newton", tolerance=1e-13, max_iterations=None):
+    """Solve from the undeformed sheet with the supports moved (no tangent prediction)."""
     solver = make_solver(method, tolerance=tolerance, max_iterations=max_iterations)
-    u, solved = model.solve_step(np.zeros(model.n_dofs), 1.0, solver)
-    return u, solved
+    problem = model.problem(1.0)
+    solved = solver.solve(problem, problem.prescribed.copy())
+    return solved.u, solved
 
 
 @pytest.mark.parametrize("state", ["taut", "wrinkled"])
@@ -140,7 +143,8 @@ def test_a_worse_prediction_is_not_used():
     model, homogeneous = homogeneous_square()
     solver = make_solver("newton", tolerance=1e-10)
     u_half, _ = model.solve_step(np.zeros(model.n_dofs), 0.5, solver)
-    _, plain = model.solve_step(u_half, 1.0, solver)
+    problem = model.problem(1.0)
+    plain = solver.solve(problem, np.where(model.constrained, problem.prescribed, u_half))
     bad = u_half + np.random.default_rng(0).normal(scale=0.02, size=model.n_dofs)
     u, predicted = model.solve_step(u_half, 1.0, solver, predicted=bad)
     assert predicted.iterations == plain.iterations > 0
@@ -148,6 +152,59 @@ def test_a_worse_prediction_is_not_used():
     _, extrapolated = model.solve_step(u_half, 1.0, solver, predicted=good)
     assert extrapolated.iterations == 0
     np.testing.assert_allclose(u, homogeneous, atol=1e-10)
+
+
+def test_a_step_that_moves_supports_starts_from_the_tangent_prediction():
+    """The prediction is the first Newton iteration from the undeformed square with the
+    support increment spread through the elastic tangent: for the homogeneous path, whose
+    boundary values are an affine map, the linear solution is that map (the patch test), and
+    the path is linear in the load factor, so the prediction is the solution up to the
+    solver's initial regularisation and the step needs at most one iteration."""
+    model, homogeneous = homogeneous_square(nx=12)
+    solver = make_solver("newton", tolerance=1e-10)
+    zero = np.zeros(model.n_dofs)
+    predicted = model.tangent_prediction(model.problem(0.2), zero, solver)
+    np.testing.assert_allclose(predicted, 0.2 * homogeneous, atol=1e-8)
+    _, solved = model.solve_step(zero, 0.2, solver)
+    assert solved.iterations <= 1
+    problem = model.problem(0.2)  # from the moved supports alone it takes several
+    plain = solver.solve(problem, problem.prescribed.copy())
+    assert plain.iterations > solved.iterations + 2
+    # nothing to predict where no support moves: the first iteration is the prediction
+    assert model.tangent_prediction(model.problem(0.2), predicted, solver) is None
+
+
+def test_a_start_in_balance_costs_no_stiffness():
+    """Given the evaluation at a start that is already in balance, the solver returns it
+    without evaluating (and factorising) the stiffness; otherwise it evaluates the stiffness
+    there once."""
+    model, homogeneous = homogeneous_square()
+    problem = model.problem(1.0)
+    calls = []
+    evaluate = problem.evaluate
+    problem.evaluate = lambda u, stiffness=True, **options: (
+        calls.append(stiffness) or evaluate(u, stiffness, **options))
+    solver = make_solver("newton", tolerance=1e-10)
+    balanced = problem.evaluate(homogeneous, stiffness=False)
+    solved = solver.solve(problem, homogeneous, balanced)
+    assert solved.iterations == 0 and calls == [False]
+    off = homogeneous + np.where(model.constrained, 0.0, 1e-3)
+    solved = solver.solve(problem, off, problem.evaluate(off, stiffness=False))
+    assert solved.iterations > 0 and calls[1:3] == [False, True]
+    np.testing.assert_allclose(solved.u, homogeneous, atol=1e-10)
+
+
+def test_undeformed_elements_far_from_the_origin_are_taut():
+    """Round-off in the deformation gradient does not grow with the coordinates over the
+    element size: a fine mesh 10^4 element sizes from the origin, undeformed, is taut and
+    stress-free everywhere (summing absolute coordinates gave noise of 10^4 eps in F)."""
+    mesh = wrinkle.rectangle(1.0, 1.0, 60, 60)
+    mesh.nodes[:, :2] += 300.0
+    model = wrinkle.Model(mesh, ANISOTROPIC)
+    result = model.evaluate_elements(np.zeros(model.n_dofs), stiffness=False)
+    assert np.all(result.response.state == TAUT)
+    C = np.einsum("nia,nib->nab", result.deformation_gradient, result.deformation_gradient)
+    np.testing.assert_allclose(C, np.broadcast_to(np.eye(2), C.shape), atol=1e-13)
 
 
 def test_unsupported_model_is_rejected():

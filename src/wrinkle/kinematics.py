@@ -129,8 +129,14 @@ def deformation_gradient(x_elements: np.ndarray, shape_gradient: np.ndarray) -> 
     Column a of F is the current image of the material axis A_a (METHOD.md section 2,
     F_m = g_alpha (x) Gamma^alpha written in the material frame).
     x_elements: (n, 3 nodes, 3) current node coordinates; shape_gradient: (n, 3, 2).
+
+    Written with the edges from node 1, F = sum_k (x_k - x_1) (x) grad psi_k (the gradients
+    sum to zero): the sum over absolute coordinates would carry a round-off of eps |x| / h (h
+    the element's size), which on a fine mesh far from the origin exceeds the threshold below
+    which a stress counts as zero and makes undeformed elements wrinkle or go slack by noise.
     """
-    return np.matmul(x_elements.transpose(0, 2, 1), shape_gradient)
+    from_first_node = x_elements - x_elements[:, :1, :]  # its first row is exactly zero
+    return np.matmul(from_first_node.transpose(0, 2, 1), shape_gradient)
 
 
 def right_cauchy_green(F: np.ndarray) -> np.ndarray:

@@ -186,16 +186,24 @@ class Model:
         return self.groups[0][1]
 
     def _force_round_off(self) -> float:
-        """Residual norm that round-off in the strains E = (C - I)/2 alone can produce:
-        100 eps |dN/dE at C = I| (sum over elements of (A0 |grad psi|)^2)^(1/2), force."""
+        """Residual norm that round-off alone can produce, force: 10 eps |dN/dE at C = I|
+        (sum over elements of (A0 |grad psi| (1 + |X| max|grad psi|))^2)^(1/2). An element's
+        strains carry a round-off of eps (1 + |X| max|grad psi|): its node coordinates are
+        rounded to eps |X|, which over an edge of length 1 / max|grad psi| is a strain, so the
+        floor rises with the mesh's fineness and its distance from the origin. (The factor 10
+        leaves a margin of 20 to 40 over the smallest residual Newton reaches on the
+        shear-stretch square, 7e-15 to 3e-13 N from 10^3 to 10^6 elements.)"""
         total = 0.0
-        for _, elements in self._groups:
+        nodes = self.mesh.nodes
+        for indices, elements in self._groups:
             g = elements.geometry
             material = elements.material.material
             stiffness = np.linalg.norm(material.response(np.eye(2)[None]).tangent)
+            extent = np.abs(nodes[self.mesh.triangles[indices]]).max(axis=(1, 2))
+            coordinate_noise = extent * np.abs(g.shape_gradient).max(axis=(1, 2))
             per_element = g.area * np.linalg.norm(g.shape_gradient.reshape(-1, 6), axis=1)
-            total += (stiffness * np.linalg.norm(per_element)) ** 2
-        return float(100 * np.finfo(float).eps * np.sqrt(total))
+            total += (stiffness * np.linalg.norm(per_element * (1.0 + coordinate_noise))) ** 2
+        return float(10 * np.finfo(float).eps * np.sqrt(total))
 
     def step_metric(self) -> np.ndarray:
         """CSR data, on ``pattern``, of the unit-tension stiffness (``unit_tension_stiffness``
@@ -535,23 +543,47 @@ class Model:
                    timer: Stopwatch | None = None, predicted: np.ndarray | None = None):
         """Solve one load level from the displacements u; returns (u, SolverResult). ``timer``
         accumulates the time of its parts. ``predicted``: a guess of the solution, (n_dofs,),
-        such as ``Model.solve``'s extrapolation from the previous steps; the solve starts from
-        it instead of u if its out-of-balance force is smaller (two evaluations of the forces)."""
+        such as ``Model.solve``'s extrapolation from the previous steps. Without one, where the
+        step moves the constrained components, the guess is the tangent prediction
+        (``tangent_prediction``; Newton solver only). The solve starts from the guess, with
+        the new prescribed values, instead of from u if the guess's out-of-balance force is
+        smaller (two evaluations of the forces)."""
         problem = self.problem(load_factor, prescribed)
         if timer is not None:
             problem.timer = timer
         start = np.where(self.constrained, problem.prescribed, u)
+        source = "extrapolated displacements"
+        if predicted is None and solver.tangent_predictor:
+            predicted = self.tangent_prediction(problem, u, solver)
+            source = "tangent prediction"
+        at_start = None
         if predicted is not None:
             guess = np.where(self.constrained, problem.prescribed, predicted)
             at_guess = try_evaluate(problem, guess, stiffness=False)
             if at_guess is not None:
                 at_start = try_evaluate(problem, start, stiffness=False)
                 if at_start is None or at_guess.residual_norm < at_start.residual_norm:
-                    logger.info("load factor %.6g starts from the extrapolated displacements",
-                                load_factor)
-                    start = guess
-        solved = solver.solve(problem, start)
+                    logger.info("load factor %.6g starts from the %s", load_factor, source)
+                    start, at_start = guess, at_guess
+        solved = solver.solve(problem, start, at_start)
         return solved.u, solved
+
+    def tangent_prediction(self, problem: StepProblem, u: np.ndarray, solver):
+        """The step's first Newton iteration taken from the last converged state u: the
+        increment of the prescribed components spread over the free ones through the tangent
+        at u, K_ff du_f = f - f*(u) - K_fc du_c (the load increment included), with the
+        solver's initial regularisation. Moving the supported nodes alone would strain only the
+        elements beside them, which may wrinkle or go slack and lose the stiffness that spreads
+        the motion; at u they still have it. None where the prescribed values do not change or
+        the tangent cannot be factorised. (n_dofs,) displacements."""
+        lift = np.where(self.constrained, problem.prescribed - u, 0.0)
+        if not np.any(lift):
+            return None  # the first iteration from u is this prediction already
+        at_u = try_evaluate(problem, u, lift=lift)
+        if at_u is None:
+            return None
+        step = solver.tangent_step(problem, at_u)
+        return None if step is None else u + lift + step
 
 
 def _concatenate_results(results: list[ElementResult], inverse: np.ndarray) -> ElementResult:
@@ -598,7 +630,15 @@ class StepProblem:
         self.metric[self._constraint_positions] = 0.0
         self.timer = Stopwatch()  # Model.solve shares one across the steps
 
-    def evaluate(self, u: np.ndarray, stiffness: bool = True) -> Evaluation:
+    def evaluate(self, u: np.ndarray, stiffness: bool = True,
+                 lift: np.ndarray | None = None) -> Evaluation:
+        """Residual, energy, element states and (``stiffness``) the tangent at u, (n_dofs,).
+
+        lift: (n_dofs,) an increment of the constrained components (zero elsewhere); the
+        residual is then the out-of-balance force linearised at u + lift,
+        f - f*(u) - K lift on the free rows, from the tangent K at u before its constrained
+        rows and columns are replaced (needs ``stiffness``).
+        """
         model, timer = self.model, self.timer
         pattern = model.pattern
         data = np.zeros(pattern.nnz) if stiffness else None
@@ -644,6 +684,9 @@ class StepProblem:
         K = None
         if stiffness:
             with timer.part(ASSEMBLY):
+                if lift is not None:
+                    coupling = model.pattern.matrix(data) @ lift
+                    residual = np.where(self.free, residual - coupling, 0.0)
                 data[self._constraint_positions] = 0.0
                 data[self._constrained_diagonal] = 1.0
                 K = model.pattern.matrix(data)

@@ -84,10 +84,12 @@ class EvaluationFailure(RuntimeError):
     """A trial configuration could not be evaluated (e.g. a collapsed element)."""
 
 
-def try_evaluate(problem: Problem, u: np.ndarray, stiffness: bool = True) -> Evaluation | None:
-    """Evaluate a trial point; None if it is not admissible (the solver then shortens the step)."""
+def try_evaluate(problem: Problem, u: np.ndarray, stiffness: bool = True,
+                 **options) -> Evaluation | None:
+    """Evaluate a trial point; None if it is not admissible (the solver then shortens the step).
+    ``options`` go to ``problem.evaluate``."""
     try:
-        evaluation = problem.evaluate(u, stiffness=stiffness)
+        evaluation = problem.evaluate(u, stiffness=stiffness, **options)
     except (EvaluationFailure, ArithmeticError, ValueError, RuntimeError) as error:
         logger.debug("trial point rejected: %s", error)
         return None
@@ -124,13 +126,15 @@ def shifted(K: sp.csr_matrix, shift: complex, free: np.ndarray,
     return sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
 
 
-def log_iteration(method: str, iteration: int, evaluation: Evaluation, theta: float) -> None:
+def log_iteration(method: str, iteration: int, evaluation: Evaluation,
+                  theta: float | None) -> None:
+    """One line per iteration on the ``wrinkle.solver`` logger (theta None: not yet chosen)."""
     taut, wrinkled, slack = evaluation.states
     logger.info(
-        "%s iteration %3d: residual %.3e (scale %.3e), theta %.2e, "
+        "%s iteration %3d: residual %.3e (scale %.3e), theta %s, "
         "taut %d, wrinkled %d, slack %d",
-        method, iteration, evaluation.residual_norm, evaluation.force_scale, theta,
-        taut, wrinkled, slack,
+        method, iteration, evaluation.residual_norm, evaluation.force_scale,
+        "-" if theta is None else f"{theta:.2e}", taut, wrinkled, slack,
     )
 
 
@@ -147,6 +151,9 @@ class RegularisedSolver:
 
     method = "solver"
     default_max_iterations = 50
+    # whether a load step that moves supports starts from the tangent prediction
+    # (``Model.tangent_prediction``)
+    tangent_predictor = True
     max_rejections = 40
 
     def __init__(self, tolerance: float = 1e-6, max_iterations: int | None = None,
@@ -186,6 +193,14 @@ class RegularisedSolver:
         return timed_solve
 
 
+    def tangent_step(self, problem: Problem, ev: Evaluation) -> np.ndarray | None:
+        """One step from ev (an evaluation of problem) with the initial regularisation and no
+        acceptance test, for a predictor; None if the regularised tangent cannot be
+        factorised. (n_dofs,)"""
+        self._timer = getattr(problem, "timer", None) or Stopwatch()
+        step, _ = self.trial_step(ev, self.initial_theta(ev.stiffness, problem.free), problem.free)
+        return step
+
     # to be defined by subclasses
     def initial_theta(self, K: sp.csr_matrix, free: np.ndarray) -> float: ...
 
@@ -203,11 +218,19 @@ class RegularisedSolver:
         a new step is factorised). None here; a subclass may search."""
         return
 
-    def solve(self, problem: Problem, u0: np.ndarray) -> SolverResult:
-        """Solve from u0 (prescribed values already set); raise ConvergenceError if it fails."""
+    def solve(self, problem: Problem, u0: np.ndarray,
+              at_start: Evaluation | None = None) -> SolverResult:
+        """Solve from u0 (prescribed values already set); raise ConvergenceError if it fails.
+        at_start: problem's evaluation at u0 if the caller has it, with or without stiffness;
+        a start already in balance then costs no evaluation of the stiffness."""
         self._timer = getattr(problem, "timer", None) or Stopwatch()
         u = np.array(u0, dtype=float)
-        ev = try_evaluate(problem, u)
+        ev = at_start
+        if ev is not None and is_converged(ev, self.tolerance):
+            log_iteration(self.method, 0, ev, None)
+            return SolverResult(u, 0, [ev.residual_norm], ev)
+        if ev is None or ev.stiffness is None:
+            ev = try_evaluate(problem, u)
         if ev is None:
             raise ConvergenceError(f"{self.method}: the starting point cannot be evaluated", [])
         history = [ev.residual_norm]

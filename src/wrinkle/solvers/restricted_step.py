@@ -26,6 +26,10 @@ class RestrictedStep(RegularisedSolver):
 
     method = "restricted-step"
     default_max_iterations = 300
+    # its merit |r|^2 is not smooth where elements change state; from the linear-elastic
+    # prediction of a flat sheet pulled at one node it stalls at a residual of 1e-4 of the
+    # force scale (tests/test_solvers.py), while from the moved supports alone it converges
+    tangent_predictor = False
 
     def initial_theta(self, K, free) -> float:
         self._scale = stiffness_scale(K, free)
