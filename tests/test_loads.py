@@ -211,3 +211,20 @@ def test_inflated_square_airbag_centre_deflection():
     projected = 0.5 * np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
     reactions = model.support_reactions(results.final.reactions)
     assert reactions["seam"][2] == pytest.approx(-5000.0 * projected, rel=1e-7)
+
+
+def test_supports_with_one_label_count_a_shared_component_once():
+    """Two supports labelled alike that both hold the corner's x and y: the label's reaction
+    balances the applied force once (global equilibrium), not with the corner counted twice."""
+    mesh = wrinkle.rectangle(1.0, 1.0, 3, 3)
+    model = wrinkle.Model(mesh, StVenantKirchhoff.isotropic(E=1.0, nu=0.3, thickness=1.0))
+    bottom = mesh.node_sets["bottom"]
+    model.fix(bottom, "xyz", label="base")
+    model.fix(bottom[:1], "xy", label="base")  # the corner again
+    model.fix(np.arange(mesh.n_nodes), "z", label="plane")
+    top = mesh.node_sets["top"]
+    model.add_nodal_force(top, (0.02, 0.05, 0.0))
+    results = model.solve()
+    reactions = model.support_reactions(results.final.reactions)
+    np.testing.assert_allclose(reactions["base"][:2], [-0.02 * top.size, -0.05 * top.size],
+                               rtol=1e-7)

@@ -415,12 +415,15 @@ class Model:
 
     def support_reactions(self, reactions: np.ndarray) -> dict[str, list[float]]:
         """Sum of the reactions (n_dofs,) over the dofs each support holds (supports with the
-        same label together): label -> [Fx, Fy, Fz]."""
-        out: dict[str, np.ndarray] = {}
+        same label together, a component they share counted once): label -> [Fx, Fy, Fz]."""
+        held: dict[str, list[np.ndarray]] = {}
         for support in self.supports:
-            force = out.setdefault(support.label, np.zeros(3))
-            force += np.bincount(support.dofs % 3, reactions[support.dofs], minlength=3)
-        return {label: force.tolist() for label, force in out.items()}
+            held.setdefault(support.label, []).append(support.dofs)
+        out = {}
+        for label, dofs in held.items():
+            dofs = np.unique(np.concatenate(dofs))
+            out[label] = np.bincount(dofs % 3, reactions[dofs], minlength=3).tolist()
+        return out
 
     def problem(self, load_factor: float = 1.0, prescribed: np.ndarray | None = None):
         """The nonlinear problem at one load level (see ``StepProblem``)."""
