@@ -8,8 +8,13 @@ displacements. For each: elements, unknowns, load steps, Newton iterations, wall
 into element evaluation, assembly, linear solves and the rest (``Results.timings``), the peak
 resident set, and the result (airbag: centre deflection; square: top-edge force F1).
 The case's load steps are kept (no cut-back); a mesh whose step does not converge within
-``--max-iterations`` is reported as not converged, with the time and memory it took. Prints a
-table and writes it as CSV.
+``--max-iterations`` is reported as not converged, with the time and memory it took. A mesh
+whose process is stopped by ``--time-limit`` is reported as not converged with what it did up
+to its last Newton iteration: the iterations, the time split and peak resident set at that
+iteration, and in the result column where it stopped (iteration, load step, residual and the
+residual needed; the CSV has the row, not converged). The solve writes these after each
+iteration to a progress file the parent reads (``Progress``). Prints a table and writes it as
+CSV.
 
     python benchmarks/scale.py --max-elements 200000 --linear-solver auto
     python benchmarks/scale.py --problems airbag --sizes 708 --max-iterations 2   # cost of
@@ -20,9 +25,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
+import re
 import resource
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -40,11 +48,82 @@ FIELDS = ["problem", "elements", "unknowns", "steps", "iterations", "max_per_ste
           "result_name", "linear_solver"]
 
 
-def solve_one(problem: str, n: int, linear_solver: str, max_iterations: int | None) -> dict:
-    """Solve one mesh in this process; the row of the table (also when the solve fails)."""
+def make_row(known: dict, per_step: list[int], converged: bool, timings: dict | None,
+             total: float, result: float) -> dict:
+    """A row of the table from the columns known before the solve, the Newton iterations of
+    each load step, the stopwatch's seconds per part (``Results.timings``; None: not known)
+    and the wall time since the process began the case."""
+    nan = float("nan")
+    element, assembly, linear = ((timings[part] if timings else nan)
+                                 for part in ("element evaluation", "assembly", "linear solves"))
+    return {
+        **known, "iterations": sum(per_step), "max_per_step": max(per_step),
+        "converged": converged, "element_s": element, "assembly_s": assembly,
+        "linear_s": linear, "rest_s": total - linear - element - assembly, "total_s": total,
+        "outside_linear": 1.0 - linear / total,
+        "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        "result": result,
+    }
+
+
+class Progress(logging.Handler):
+    """Appends a partial row (one line of JSON) to a file after each Newton iteration
+    and each converged load step, from the solver's log messages, so that a run stopped by
+    ``--time-limit`` can be reported. The row has, beyond the table's columns, the load step
+    (``step``), its last iteration (``step_iteration``), the residual and the residual needed
+    (tolerance x force scale; the solver also accepts one at round-off, which is not logged),
+    and ``time_split``: whether the seconds per part are known (from the solve's stopwatch,
+    found through ``watch``; without it they are NaN)."""
+
+    ITERATION = re.compile(r"iteration\s+(\d+): residual (\S+) \(scale (\S+)\)")
+    STEP = re.compile(r"load factor \S+ converged in (\d+) iterations")
+
+    def __init__(self, path: str, known: dict, start: float, tolerance: float):
+        super().__init__(logging.INFO)
+        self.path, self.known, self.start, self.tolerance = path, known, start, tolerance
+        self.per_step: list[int] = []  # iterations of the converged load steps
+        self.iteration = 0  # last iteration of the step being solved
+        self.residual = self.needed = float("nan")
+        self.stopwatch = None
+
+    def watch(self, model) -> None:
+        """Note the stopwatch ``model.solve`` passes to each load step (``Results.stopwatch``),
+        for the time split of the partial rows."""
+        solve_step = model.solve_step
+
+        def watched(*args, timer=None, **kwargs):
+            self.stopwatch = timer
+            return solve_step(*args, timer=timer, **kwargs)
+
+        model.solve_step = watched
+
+    def emit(self, record: logging.LogRecord) -> None:
+        message = record.getMessage()
+        if match := self.ITERATION.search(message):
+            self.iteration, self.residual = int(match[1]), float(match[2])
+            self.needed = self.tolerance * float(match[3])
+        elif match := self.STEP.search(message):
+            self.per_step.append(int(match[1]))
+            self.iteration, self.residual, self.needed = 0, float("nan"), float("nan")
+        else:
+            return
+        timings = self.stopwatch.summary() if self.stopwatch is not None else None
+        row = make_row(self.known, [*self.per_step, self.iteration], False, timings,
+                       time.perf_counter() - self.start, float("nan"))
+        row.update(step=len(self.per_step) + 1, step_iteration=self.iteration,
+                   residual=self.residual, needed=self.needed, time_split=timings is not None)
+        with open(self.path, "a") as file:  # written out at once, for the parent to read
+            file.write(json.dumps(row) + "\n")
+
+
+def solve_one(problem: str, n: int, linear_solver: str, max_iterations: int | None,
+              progress: str | None = None) -> dict:
+    """Solve one mesh in this process; the row of the table (also when the solve fails).
+    ``progress``: a file to write a partial row to after each Newton iteration (``Progress``)."""
     import numpy as np
 
     from wrinkle.case import read_case
+    from wrinkle.model import SOLVE_DEFAULTS
     from wrinkle.solvers import ConvergenceError
     from wrinkle.solvers.linear import make_linear_solver
 
@@ -52,16 +131,33 @@ def solve_one(problem: str, n: int, linear_solver: str, max_iterations: int | No
     case = ROOT / "examples" / f"{problem}.toml"
     model = read_case(case, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}})
     steps = model.solver_settings.get("steps", 1)
+    known = {"problem": problem, "elements": model.mesh.n_elements,
+             "unknowns": int(np.count_nonzero(~model.constrained)), "steps": steps,
+             "result_name": RESULT_NAMES[problem],
+             "linear_solver": make_linear_solver(linear_solver, model.n_dofs).name}
+    log = logging.getLogger("wrinkle")  # the solver's "wrinkle.solver" messages come here too
+    level = log.level
+    if progress:
+        tolerance = {**SOLVE_DEFAULTS, **model.solver_settings}["tolerance"]
+        handler = Progress(progress, known, start, tolerance)
+        handler.watch(model)
+        log.addHandler(handler)
+        log.setLevel(logging.INFO)
     failed = None
     try:  # the case's load steps, no cut-back: a failed step ends the run
         results = model.solve(linear_solver=linear_solver, max_iterations=max_iterations,
                               min_step=1.0 / steps)
     except ConvergenceError as error:
         results, failed = error.results, error
+    finally:
+        if progress:
+            log.removeHandler(handler)
+            log.setLevel(level)
     per_step = [step.iterations for step in results.steps]
     if failed is not None:
         per_step.append(len(failed.history) - 1)
     timings = results.timings
+    result = float("nan")
     if failed is None:
         u = results.final.displacement
         if problem == "airbag":
@@ -71,26 +167,36 @@ def solve_one(problem: str, n: int, linear_solver: str, max_iterations: int | No
             top = model.mesh.node_sets["top"]
             result = float(results.final.reactions.reshape(-1, 3)[top, 0].sum())
     total = time.perf_counter() - start
-    linear = timings["linear solves"]
-    return {
-        "problem": problem, "elements": model.mesh.n_elements,
-        "unknowns": int(np.count_nonzero(~model.constrained)), "steps": steps,
-        "iterations": sum(per_step), "max_per_step": max(per_step),
-        "converged": failed is None,
-        "element_s": timings["element evaluation"], "assembly_s": timings["assembly"],
-        "linear_s": linear, "rest_s": total - linear - timings["element evaluation"]
-        - timings["assembly"], "total_s": total,
-        "outside_linear": 1.0 - linear / total,
-        "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-        "result": result if failed is None else float("nan"),
-        "result_name": RESULT_NAMES[problem],
-        "linear_solver": make_linear_solver(linear_solver, model.n_dofs).name,
-    }
+    return make_row(known, per_step, failed is None, timings, total, result)
+
+
+def stopped_row(progress: Path, time_limit: float) -> dict | None:
+    """The last partial row a run stopped after time_limit seconds wrote to its progress file
+    (``Progress``), with a note of where it stopped; None if it wrote none."""
+    for line in reversed(progress.read_text().splitlines()):
+        try:
+            row = json.loads(line)
+        except json.JSONDecodeError:  # the line being written when the process was stopped
+            continue
+        if row["residual"] != row["residual"]:  # NaN: stopped between two load steps
+            where = f"in step {row['step']}, after step {row['step'] - 1} converged"
+        else:
+            where = (f"at iteration {row['step_iteration']} of step {row['step']} (residual "
+                     f"{row['residual']:.2e}, {row['needed']:.2e} needed)")
+        row["stopped"] = f"stopped after {time_limit:.0f} s {where}"
+        if not row["time_split"]:
+            row["stopped"] += ", time split not known"
+        return row
+    return None
 
 
 def print_row(row: dict) -> None:
-    result = (f"{row['result_name']} = {row['result']:.6g}" if row["converged"]
-              else "NOT CONVERGED")
+    if row.get("stopped"):
+        result = row["stopped"]
+    elif row["converged"]:
+        result = f"{row['result_name']} = {row['result']:.6g}"
+    else:
+        result = "NOT CONVERGED"
     print(f"{row['problem']:>13} {row['elements']:9d} {row['unknowns']:9d} "
           f"{row['steps']:5d} {row['iterations']:5d} {row['max_per_step']:8d} "
           f"{row['element_s']:10.2f} {row['assembly_s']:10.2f} {row['linear_s']:9.2f} "
@@ -112,36 +218,46 @@ def main() -> None:
                         help="seconds per mesh before its process is stopped")
     parser.add_argument("--csv", default="scale.csv")
     parser.add_argument("--one", nargs=2, metavar=("PROBLEM", "N"), help=argparse.SUPPRESS)
+    parser.add_argument("--progress", help=argparse.SUPPRESS)  # --one's partial rows go here
     args = parser.parse_args()
     if args.one:
-        row = solve_one(args.one[0], int(args.one[1]), args.linear_solver, args.max_iterations)
+        row = solve_one(args.one[0], int(args.one[1]), args.linear_solver, args.max_iterations,
+                        args.progress)
         print(json.dumps(row))
         return
     print(f"{'problem':>13} {'elements':>9} {'unknowns':>9} {'steps':>5} {'iter':>5} "
           f"{'max/step':>8} {'elements s':>10} {'assembly s':>10} {'linear s':>9} "
           f"{'rest s':>7} {'total s':>8} {'not linear':>10} {'peak MB':>8}  result")
     rows = []
-    for problem in args.problems:
-        for n in args.sizes or SIZES[problem]:
-            if 2 * n * n > args.max_elements:
-                print(f"{problem:>13} n = {n}: skipped, {2 * n * n} elements > --max-elements")
-                continue
-            command = [sys.executable, __file__, "--one", problem, str(n),
-                       "--linear-solver", args.linear_solver]
-            if args.max_iterations:
-                command += ["--max-iterations", str(args.max_iterations)]
-            try:
-                done = subprocess.run(command, capture_output=True, text=True, check=False,
-                                      timeout=args.time_limit)
-            except subprocess.TimeoutExpired:
-                print(f"{problem:>13} n = {n}: stopped after {args.time_limit:.0f} s")
-                continue
-            if done.returncode != 0:
-                print(f"{problem:>13} n = {n}: failed\n{done.stderr.strip()[-2000:]}")
-                continue
-            row = json.loads(done.stdout.strip().splitlines()[-1])
-            rows.append(row)
-            print_row(row)
+    with tempfile.TemporaryDirectory(prefix="scale-") as scratch:
+        for problem in args.problems:
+            for n in args.sizes or SIZES[problem]:
+                if 2 * n * n > args.max_elements:
+                    print(f"{problem:>13} n = {n}: skipped, {2 * n * n} elements > --max-elements")
+                    continue
+                progress = Path(scratch) / f"{problem}-{n}.jsonl"
+                progress.write_text("")
+                command = [sys.executable, __file__, "--one", problem, str(n),
+                           "--linear-solver", args.linear_solver, "--progress", str(progress)]
+                if args.max_iterations:
+                    command += ["--max-iterations", str(args.max_iterations)]
+                try:
+                    done = subprocess.run(command, capture_output=True, text=True, check=False,
+                                          timeout=args.time_limit)
+                except subprocess.TimeoutExpired:
+                    row = stopped_row(progress, args.time_limit)
+                    if row is None:
+                        print(f"{problem:>13} n = {n}: stopped after {args.time_limit:.0f} s")
+                    else:
+                        rows.append(row)
+                        print_row(row)
+                    continue
+                if done.returncode != 0:
+                    print(f"{problem:>13} n = {n}: failed\n{done.stderr.strip()[-2000:]}")
+                    continue
+                row = json.loads(done.stdout.strip().splitlines()[-1])
+                rows.append(row)
+                print_row(row)
     write_csv(args.csv, rows, FIELDS)
 
 
