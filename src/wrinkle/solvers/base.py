@@ -192,7 +192,6 @@ class RegularisedSolver:
 
         return timed_solve
 
-
     def tangent_step(self, problem: Problem, ev: Evaluation) -> np.ndarray | None:
         """One step from ev (an evaluation of problem) with the initial regularisation and no
         acceptance test, for a predictor; None if the regularised tangent cannot be
