@@ -480,7 +480,8 @@ class Model:
         fails is cut in half (down to ``min_step``, default 1e-4) and the increment grows again
         after easy steps (at most back to 1/steps). From the second step on, a step starts from
         the linear extrapolation of the last two converged states (u0 being the state at load
-        factor 0) where that is closer to balance than the last one (``solve_step``).
+        factor 0) where that is closer to balance than the last one, and the first step, if it
+        moves supports, from the tangent prediction (``solve_step``).
         ``method`` "newton" (default) or "restricted-step"; ``tolerance`` on the residual
         force relative to the applied and reaction forces (default 1e-6); ``max_iterations``
         per step (default: the method's); ``linear_solver`` "auto" (default), "superlu",

@@ -192,11 +192,15 @@ class RegularisedSolver:
 
         return timed_solve
 
+    def _time_with(self, problem: Problem) -> None:
+        """Charge the factorisations and solves to the problem's stopwatch (if it has one)."""
+        self._timer = getattr(problem, "timer", None) or Stopwatch()
+
     def tangent_step(self, problem: Problem, ev: Evaluation) -> np.ndarray | None:
         """One step from ev (an evaluation of problem) with the initial regularisation and no
         acceptance test, for a predictor; None if the regularised tangent cannot be
         factorised. (n_dofs,)"""
-        self._timer = getattr(problem, "timer", None) or Stopwatch()
+        self._time_with(problem)
         step, _ = self.trial_step(ev, self.initial_theta(ev.stiffness, problem.free), problem.free)
         return step
 
@@ -222,7 +226,7 @@ class RegularisedSolver:
         """Solve from u0 (prescribed values already set); raise ConvergenceError if it fails.
         at_start: problem's evaluation at u0 if the caller has it, with or without stiffness;
         a start already in balance then costs no evaluation of the stiffness."""
-        self._timer = getattr(problem, "timer", None) or Stopwatch()
+        self._time_with(problem)
         u = np.array(u0, dtype=float)
         ev = at_start
         if ev is not None and is_converged(ev, self.tolerance):
