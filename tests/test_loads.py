@@ -211,6 +211,10 @@ def test_inflated_square_airbag_centre_deflection():
     projected = 0.5 * np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
     reactions = model.support_reactions(results.final.reactions)
     assert reactions["seam"][2] == pytest.approx(-5000.0 * projected, rel=1e-7)
+    # the step's reactions, taken from the solver's last evaluation, are the reactions
+    # evaluated afresh at the converged displacements (internal minus follower forces)
+    np.testing.assert_array_equal(results.final.reactions,
+                                  model.reactions(results.final.displacement, 1.0))
 
 
 def test_supports_with_one_label_count_a_shared_component_once():

@@ -677,7 +677,7 @@ class StepProblem:
             if model._edge_follower:
                 energy = np.nan  # follower edge loads have no potential
         residual = np.where(self.free, external - internal, 0.0)
-        reactions = internal[~self.free] - external[~self.free]
+        reactions = np.where(self.free, 0.0, internal - external)
         scale = max(np.linalg.norm(external), np.linalg.norm(reactions))
         state = result.response.state
         counts = (
@@ -696,7 +696,7 @@ class StepProblem:
                 K = model.pattern.matrix(data)
         return Evaluation(
             residual, energy, scale, counts, K, model.force_round_off, self.symmetric,
-            model.pattern.diagonal, self.metric,
+            model.pattern.diagonal, self.metric, reactions,
         )
 
 
@@ -727,10 +727,14 @@ class Results:
         return self.stopwatch.summary()
 
     def append(self, load_factor: float, u: np.ndarray, solved) -> StepResult:
+        """Add the converged step u (n_dofs,); its reactions come from the solver's last
+        evaluation, at u, where it has them."""
         ev = solved.evaluation
+        reactions = ev.reactions
+        if reactions is None:
+            reactions = self.model.reactions(u, load_factor)
         step = StepResult(
-            load_factor, u.copy(), solved.iterations, ev.residual_norm,
-            self.model.reactions(u, load_factor), ev.states,
+            load_factor, u.copy(), solved.iterations, ev.residual_norm, reactions, ev.states,
         )
         self.steps.append(step)
         return step

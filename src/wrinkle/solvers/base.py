@@ -35,6 +35,8 @@ class Evaluation:
     metric: data, on the stiffness' own sparsity pattern, of a positive semidefinite matrix
         (zero in constrained rows and columns) in which the Newton solver measures its steps;
         None for the identity.
+    reactions: (n_dofs,) internal minus external force at the constrained dofs, zero
+        elsewhere (the support reactions), if the problem gives them.
     """
 
     residual: np.ndarray
@@ -46,6 +48,7 @@ class Evaluation:
     symmetric: bool = True
     diagonal: np.ndarray | None = None
     metric: np.ndarray | None = None
+    reactions: np.ndarray | None = None
 
     @property
     def residual_norm(self) -> float:
