@@ -245,6 +245,29 @@ def test_newton_regularises_in_the_unit_tension_metric():
                                rtol=1e-14, atol=1e-12 * s_K)
 
 
+def test_step_metric_follows_the_supports():
+    """Each step's metric is the unit-tension Laplacian with the constrained rows and columns
+    zeroed, also after a support is added between solves (its cache is renewed)."""
+    model = sheet_model(TOP_DISPLACEMENT["wrinkled"])
+    model.solve()
+    L = model.pattern.matrix(model.step_metric()).toarray()
+
+    def expected():
+        held = model.constrained
+        zeroed = L.copy()
+        zeroed[held, :] = 0.0
+        zeroed[:, held] = 0.0
+        return zeroed
+
+    np.testing.assert_array_equal(model.pattern.matrix(model.problem(1.0).metric).toarray(),
+                                  expected())
+    held_before = np.count_nonzero(model.constrained)
+    model.fix(np.flatnonzero(~model.constrained)[:3] // 3, "x")
+    assert np.count_nonzero(model.constrained) > held_before
+    np.testing.assert_array_equal(model.pattern.matrix(model.problem(1.0).metric).toarray(),
+                                  expected())
+
+
 class _Bowl:
     """Pi(u) = sum(sqrt(1 + u^2)) - f.u: convex, with a curvature that vanishes far out, so
     that a Newton step from near the bottom can overshoot far up the other side."""

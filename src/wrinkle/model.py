@@ -102,7 +102,7 @@ class Model:
         self._material_of_element = np.full(n, -1)
         self._materials: list[Wrinkling] = []
         self._groups = None
-        self._step_metric = None
+        self._constraint_data = None  # see constraint_data
         self.pattern = SparsityPattern(mesh.triangles, mesh.n_nodes)
         self.n_dofs = DOFS_PER_NODE * mesh.n_nodes
         self.constrained = np.zeros(self.n_dofs, dtype=bool)
@@ -144,6 +144,7 @@ class Model:
         if fibre_angle is not None:
             self._fibre_angle[elements] = fibre_angle
         self._groups = None
+        self._constraint_data = None
 
     def _build(self) -> None:
         missing = np.flatnonzero(self._material_of_element < 0)
@@ -207,17 +208,30 @@ class Model:
 
     def step_metric(self) -> np.ndarray:
         """CSR data, on ``pattern``, of the unit-tension stiffness (``unit_tension_stiffness``
-        assembled: a Laplacian on each displacement component), (nnz,); computed once."""
-        if self._step_metric is None:
-            g = self.geometry
-            data = np.zeros(self.pattern.nnz)
-            for start in range(0, g.n_elements, KERNEL_BLOCK):
-                block = slice(start, min(start + KERNEL_BLOCK, g.n_elements))
-                self.pattern.add_to_data(
-                    data, block, unit_tension_stiffness(g.area[block], g.shape_gradient[block])
-                )
-            self._step_metric = data
-        return self._step_metric
+        assembled: a Laplacian on each displacement component), (nnz,)."""
+        g = self.geometry
+        data = np.zeros(self.pattern.nnz)
+        for start in range(0, g.n_elements, KERNEL_BLOCK):
+            block = slice(start, min(start + KERNEL_BLOCK, g.n_elements))
+            self.pattern.add_to_data(
+                data, block, unit_tension_stiffness(g.area[block], g.shape_gradient[block])
+            )
+        return data
+
+    def constraint_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """What every load step's problem needs of the supports: positions in ``pattern``'s
+        data of the constrained rows and columns and of the constrained diagonal entries, and
+        the step metric (``step_metric``) with those rows and columns zeroed, (nnz,). Made
+        once, and again only when the supports change."""
+        cached = self._constraint_data
+        if cached is None or not np.array_equal(cached[0], self.constrained):
+            positions = self.pattern.constraint_positions(self.constrained)
+            metric = self.step_metric()
+            metric[positions] = 0.0
+            cached = (self.constrained.copy(), positions,
+                      self.pattern.diagonal[self.constrained], metric)
+            self._constraint_data = cached
+        return cached[1:]
 
     # -- supports and loads -------------------------------------------------------------
     def _node_indices(self, nodes) -> np.ndarray:
@@ -626,12 +640,10 @@ class StepProblem:
         self.prescribed = prescribed
         self.free = ~model.constrained
         self.symmetric = not model.has_follower_loads
-        pattern = model.pattern
-        self._constraint_positions = pattern.constraint_positions(model.constrained)
-        self._constrained_diagonal = pattern.diagonal[model.constrained]
-        # the solver's step metric, with the constrained rows and columns zeroed
-        self.metric = model.step_metric().copy()
-        self.metric[self._constraint_positions] = 0.0
+        # the solver's step metric has the constrained rows and columns zeroed
+        self._constraint_positions, self._constrained_diagonal, self.metric = (
+            model.constraint_data()
+        )
         self.timer = Stopwatch()  # Model.solve shares one across the steps
 
     def evaluate(self, u: np.ndarray, stiffness: bool = True,
