@@ -194,6 +194,33 @@ def test_a_start_in_balance_costs_no_stiffness():
     np.testing.assert_allclose(solved.u, homogeneous, atol=1e-10)
 
 
+def test_a_prediction_in_balance_costs_one_evaluation():
+    """A load step given a prediction already in balance starts from it after one evaluation
+    of the forces (none at the plain start, no stiffness); a prediction out of balance is
+    compared with the plain start (two evaluations) and then solved from."""
+    model, homogeneous = homogeneous_square()
+    calls = []
+    make_problem = model.problem
+
+    def counted_problem(*args, **kwargs):
+        problem = make_problem(*args, **kwargs)
+        evaluate = problem.evaluate
+        problem.evaluate = lambda u, stiffness=True, **options: (
+            calls.append(stiffness) or evaluate(u, stiffness, **options))
+        return problem
+
+    model.problem = counted_problem
+    solver = make_solver("newton", tolerance=1e-10)
+    u, solved = model.solve_step(np.zeros(model.n_dofs), 1.0, solver, predicted=homogeneous)
+    assert solved.iterations == 0 and calls == [False]
+    np.testing.assert_array_equal(u, homogeneous)
+    calls.clear()
+    off = homogeneous + np.where(model.constrained, 0.0, 1e-3)
+    u, solved = model.solve_step(np.zeros(model.n_dofs), 1.0, solver, predicted=off)
+    assert calls[:3] == [False, False, True] and solved.iterations > 0
+    np.testing.assert_allclose(u, homogeneous, atol=1e-10)
+
+
 def test_undeformed_elements_far_from_the_origin_are_taut():
     """Round-off in the deformation gradient does not grow with the coordinates over the
     element size: a fine mesh 10^4 element sizes from the origin, undeformed, is taut and

@@ -36,7 +36,7 @@ from wrinkle.loads import (
 from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh
 from wrinkle.solvers import ConvergenceError, make_solver
-from wrinkle.solvers.base import Evaluation, EvaluationFailure, try_evaluate
+from wrinkle.solvers.base import Evaluation, EvaluationFailure, is_converged, try_evaluate
 from wrinkle.timing import ASSEMBLY, ELEMENTS, Stopwatch
 from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, Wrinkling, WrinklingError
 
@@ -564,8 +564,8 @@ class Model:
         such as ``Model.solve``'s extrapolation from the previous steps. Without one, where the
         step moves the constrained components, the guess is the tangent prediction
         (``tangent_prediction``; Newton solver only). The solve starts from the guess, with
-        the new prescribed values, instead of from u if the guess's out-of-balance force is
-        smaller (two evaluations of the forces)."""
+        the new prescribed values, instead of from u if the guess is in balance already (one
+        evaluation of the forces) or its out-of-balance force is smaller (two)."""
         problem = self.problem(load_factor, prescribed)
         if timer is not None:
             problem.timer = timer
@@ -579,7 +579,8 @@ class Model:
             guess = np.where(self.constrained, problem.prescribed, predicted)
             at_guess = try_evaluate(problem, guess, stiffness=False)
             if at_guess is not None:
-                at_start = try_evaluate(problem, start, stiffness=False)
+                if not is_converged(at_guess, solver.tolerance):
+                    at_start = try_evaluate(problem, start, stiffness=False)
                 if at_start is None or at_guess.residual_norm < at_start.residual_norm:
                     logger.info("load factor %.6g starts from the %s", load_factor, source)
                     start, at_start = guess, at_guess
