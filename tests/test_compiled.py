@@ -1,6 +1,7 @@
 """Compiled kernels (``wrinkle.compiled``, Numba) against the NumPy formulas they replace: the
 element stiffness against ``element.element_stiffness`` with ``strain_displacement``, the
-scatter against ``np.bincount``, and a whole evaluation of the airbag (forces, stiffness,
+scatter against ``np.bincount``, the pressure stiffness against
+``loads.subtract_pressure_stiffness``, and a whole evaluation of the airbag (forces, stiffness,
 energy) with and without them, and the rule that chooses them. Skipped where Numba is not
 installed, except the rule."""
 
@@ -14,6 +15,7 @@ import pytest
 from wrinkle import compiled
 from wrinkle.case import read_case
 from wrinkle.element import element_stiffness, strain_displacement
+from wrinkle.loads import subtract_pressure_stiffness
 
 needs_numba = pytest.mark.skipif(not compiled.installed(), reason="numba not installed")
 AIRBAG = Path(__file__).resolve().parents[1] / "examples" / "airbag.toml"
@@ -84,3 +86,14 @@ def test_airbag_evaluation_same_with_and_without_compiled_kernels(monkeypatch):
     np.testing.assert_allclose(K.data, K_numpy.data, rtol=0,
                                atol=1e-12 * np.abs(K_numpy.data).max())
     assert compiled_ev.energy == pytest.approx(numpy_ev.energy, rel=1e-13)
+
+
+@needs_numba
+def test_pressure_stiffness_equals_numpy_loop():
+    rng = np.random.default_rng(5)
+    x, pressure = rng.normal(size=(33, 3, 3)), rng.uniform(0.5, 2.0, 33)
+    K = rng.normal(size=(33, 9, 9))
+    expected = K.copy()
+    subtract_pressure_stiffness(expected, x, pressure)
+    compiled.subtract_pressure_stiffness(K, x, pressure)
+    np.testing.assert_array_equal(K, expected)

@@ -55,10 +55,22 @@ def subtract_pressure_stiffness(K: np.ndarray, x: np.ndarray, pressure: np.ndarr
     tangent of the internal minus the external forces), x (n, 3 nodes, 3), pressure (n,).
 
     Row block k of the load stiffness is the same for every node k (each takes a third of
-    p c / 2), so it is subtracted by broadcasting, without an (n, 9, 9) copy.
+    p c / 2): block (k, l) is (p / 6) [w_l]x with w_l of ``_area_vector_derivative``, whose six
+    off-diagonal entries are subtracted column by column, without (n, 9, 9) or (n, 3, 3, 3)
+    temporaries (``wrinkle.compiled.subtract_pressure_stiffness`` is the same loop compiled).
     """
-    dc = _area_vector_derivative(x) * (pressure[:, None, None, None] / 6.0)  # (n, l, i, j)
-    K.reshape(-1, 3, 3, 3, 3)[...] -= dc.transpose(0, 2, 1, 3)[:, None]
+    q = pressure / 6.0
+    x1, x2, x3 = x[:, 0], x[:, 1], x[:, 2]
+    for l, w in enumerate((x3 - x2, x1 - x3, x2 - x1)):
+        a0, a1, a2 = q * w[:, 0], q * w[:, 1], q * w[:, 2]  # (p / 6) w_l
+        c = 3 * l
+        for r in range(0, 9, 3):  # K -= (p / 6) [w_l]x in block (k, l), r = 3 k
+            K[:, r, c + 1] += a2
+            K[:, r, c + 2] -= a1
+            K[:, r + 1, c] -= a2
+            K[:, r + 1, c + 2] += a0
+            K[:, r + 2, c] += a1
+            K[:, r + 2, c + 1] -= a0
 
 
 def pressure_volume(x: np.ndarray) -> np.ndarray:

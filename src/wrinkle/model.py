@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wrinkle import compiled
 from wrinkle.assembly import DOFS_PER_NODE, SparsityPattern
 from wrinkle.element import (
     KERNEL_BLOCK,
@@ -404,7 +405,10 @@ class Model:
         pressure = self._pressure[elements]
         if np.any(pressure):
             x = x_nodes[self.mesh.triangles[elements]]
-            subtract_pressure_stiffness(K, x, load_factor * pressure)
+            if compiled.enabled(self.mesh.n_elements):
+                compiled.subtract_pressure_stiffness(K, x, load_factor * pressure)
+            else:
+                subtract_pressure_stiffness(K, x, load_factor * pressure)
 
     def pressure_work(self, u: np.ndarray) -> float:
         """Sum of p V_cone over the pressurised elements at full load (``pressure_volume``):
