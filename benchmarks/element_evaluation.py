@@ -44,6 +44,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PARTS = [
     ("wrinkle.model", "StepProblem.evaluate", "problem: residual, energy, matrix (rest)"),
     ("wrinkle.model", "Model.evaluate_elements", "element coordinates x[triangles]"),
+    ("wrinkle.model", "Model.element_coordinates", "element coordinates x[triangles]"),
     ("wrinkle.element", "MembraneElements.evaluate", "element blocks: copies (rest)"),
     ("wrinkle.element", "deformation_gradient", "deformation gradient F"),
     ("wrinkle.element", "right_cauchy_green", "Cauchy-Green C"),

@@ -335,14 +335,20 @@ class Model:
         return bool(np.any(self._pressure != 0) or self._edge_follower)
 
     # -- evaluation ---------------------------------------------------------------------
+    def element_coordinates(self, u: np.ndarray) -> np.ndarray:
+        """Current node coordinates of every triangle at displacements u, (n_elements, 3, 3)."""
+        return element_coordinates(self.mesh.nodes + u.reshape(-1, 3), self.mesh.triangles)
+
     def evaluate_elements(self, u: np.ndarray, stiffness: bool = True,
-                          stiffness_sink=None) -> ElementResult:
+                          stiffness_sink=None, x_elements: np.ndarray | None = None
+                          ) -> ElementResult:
         """Element forces, stiffness and states at displacements u, (n_dofs,).
 
         stiffness_sink(elements, K): if given, receives the stiffness block by block (mesh
         element indices or a slice, (m, 9, 9)) instead of the result holding all of it.
+        x_elements: ``element_coordinates(u)`` if the caller has them.
         """
-        x = element_coordinates(self.mesh.nodes + u.reshape(-1, 3), self.mesh.triangles)
+        x = self.element_coordinates(u) if x_elements is None else x_elements
         groups = self.groups
         results = []
         for index, elements in groups:
@@ -360,28 +366,39 @@ class Model:
             return results[0]
         return _concatenate_results(results, self._inverse_order)
 
+    def _pressurised(self):
+        """The elements under pressure, as indices, or a slice if they are all of them."""
+        loaded = np.flatnonzero(self._pressure)
+        return slice(0, loaded.size) if loaded.size == self.mesh.n_elements else loaded
+
     def follower_forces(self, u: np.ndarray, load_factor: float, stiffness: bool = True,
-                        stiffness_sink=None, pressure_stiffness: bool = True):
+                        stiffness_sink=None, pressure_stiffness: bool = True,
+                        x_elements: np.ndarray | None = None):
         """Assembled follower loads at u: forces (n_dofs,) and their load stiffness d f / d u,
         element-wise (n, 9, 9) on the triangles (None if not asked or no follower load), or
         handed block by block to ``stiffness_sink(elements, K)`` (then None is returned).
         pressure_stiffness=False leaves the pressure's out (``subtract_pressure_stiffness``
-        takes it into the element blocks instead)."""
+        takes it into the element blocks instead). x_elements: ``element_coordinates(u)`` if
+        the caller has them."""
         x_nodes = self.mesh.nodes + u.reshape(-1, 3)
         forces = np.zeros(self.n_dofs)
         blocks = []  # (elements, K) when no sink is given
         sink = stiffness_sink or (lambda elements, k: blocks.append((elements, k.copy())))
-        loaded = np.flatnonzero(self._pressure)
-        if loaded.size:
-            x = x_nodes[self.mesh.triangles[loaded]]
+        loaded = self._pressurised()
+        if isinstance(loaded, slice) or loaded.size:
+            if x_elements is None:
+                x = x_nodes[self.mesh.triangles[loaded]]
+            else:
+                x = x_elements[loaded]
             pressure = load_factor * self._pressure[loaded]
             f, _ = pressure_forces(x, pressure, stiffness=False)
             forces += np.bincount(self.pattern.element_dofs[loaded].ravel(), f.ravel(),
                                   minlength=self.n_dofs)
-            for start in range(0, loaded.size, KERNEL_BLOCK) if stiffness and pressure_stiffness \
+            for start in range(0, x.shape[0], KERNEL_BLOCK) if stiffness and pressure_stiffness \
                     else ():
-                block = slice(start, start + KERNEL_BLOCK)
-                sink(loaded[block], pressure_forces(x[block], pressure[block])[1])
+                block = slice(start, min(start + KERNEL_BLOCK, x.shape[0]))
+                elements = block if isinstance(loaded, slice) else loaded[block]
+                sink(elements, pressure_forces(x[block], pressure[block])[1])
         for triples, q, owner, local_dofs in self._edge_follower:
             f, k = edge_follower_forces(x_nodes[triples], load_factor * q, stiffness)
             dofs = (3 * triples[:, :, None] + np.arange(3)).reshape(-1, 9)
@@ -398,26 +415,29 @@ class Model:
             np.add.at(K, elements, k)
         return forces, K
 
-    def subtract_pressure_stiffness(self, K: np.ndarray, x_nodes: np.ndarray, elements,
+    def subtract_pressure_stiffness(self, K: np.ndarray, x: np.ndarray, elements,
                                     load_factor: float) -> None:
         """Subtract the pressure's load stiffness from the element matrices K (m, 9, 9) of
-        ``elements`` (a slice or indices) in place; x_nodes (n_nodes, 3) current positions."""
+        ``elements`` (a slice or indices) in place; x (m, 3, 3) their current coordinates."""
         pressure = self._pressure[elements]
         if np.any(pressure):
-            x = x_nodes[self.mesh.triangles[elements]]
             if compiled.enabled(self.mesh.n_elements):
                 compiled.subtract_pressure_stiffness(K, x, load_factor * pressure)
             else:
                 subtract_pressure_stiffness(K, x, load_factor * pressure)
 
-    def pressure_work(self, u: np.ndarray) -> float:
+    def pressure_work(self, u: np.ndarray, x_elements: np.ndarray | None = None) -> float:
         """Sum of p V_cone over the pressurised elements at full load (``pressure_volume``):
         the pressure's potential is minus this; exact when the boundary is held or moves in
-        planes through the origin (symmetry planes), otherwise a merit for the solver only."""
-        loaded = np.flatnonzero(self._pressure)
-        if loaded.size == 0:
+        planes through the origin (symmetry planes), otherwise a merit for the solver only.
+        x_elements: ``element_coordinates(u)`` if the caller has them."""
+        loaded = self._pressurised()
+        if not isinstance(loaded, slice) and loaded.size == 0:
             return 0.0
-        x = (self.mesh.nodes + u.reshape(-1, 3))[self.mesh.triangles[loaded]]
+        if x_elements is None:
+            x = (self.mesh.nodes + u.reshape(-1, 3))[self.mesh.triangles[loaded]]
+        else:
+            x = x_elements[loaded]
         return float(self._pressure[loaded] @ pressure_volume(x))
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
@@ -664,10 +684,11 @@ class StepProblem:
         pattern = model.pattern
         data = np.zeros(pattern.nnz) if stiffness else None
 
-        x_nodes = model.mesh.nodes + u.reshape(-1, 3)
+        with timer.part(ELEMENTS):
+            x = model.element_coordinates(u)  # shared by the elements and the pressure
 
         def add_element_stiffness(elements, K):  # assembled block by block as evaluated
-            model.subtract_pressure_stiffness(K, x_nodes, elements, self.load_factor)
+            model.subtract_pressure_stiffness(K, x[elements], elements, self.load_factor)
             with timer.part(ASSEMBLY):
                 pattern.add_to_data(data, elements, K)
 
@@ -677,7 +698,8 @@ class StepProblem:
 
         with timer.part(ELEMENTS):
             result = model.evaluate_elements(
-                u, stiffness=stiffness, stiffness_sink=add_element_stiffness if stiffness else None
+                u, stiffness=stiffness, stiffness_sink=add_element_stiffness if stiffness else None,
+                x_elements=x,
             )
         with timer.part(ASSEMBLY):
             internal = pattern.assemble_vector(result.forces)
@@ -687,10 +709,10 @@ class StepProblem:
             with timer.part(ELEMENTS):
                 follower, _ = model.follower_forces(
                     u, self.load_factor, stiffness, subtract_load_stiffness if stiffness else None,
-                    pressure_stiffness=False,
+                    pressure_stiffness=False, x_elements=x,
                 )
             external = external + follower
-            energy -= self.load_factor * model.pressure_work(u)
+            energy -= self.load_factor * model.pressure_work(u, x_elements=x)
             if model._edge_follower:
                 energy = np.nan  # follower edge loads have no potential
         residual = np.where(self.free, external - internal, 0.0)
