@@ -130,13 +130,21 @@ def deformation_gradient(x_elements: np.ndarray, shape_gradient: np.ndarray) -> 
     F_m = g_alpha (x) Gamma^alpha written in the material frame).
     x_elements: (n, 3 nodes, 3) current node coordinates; shape_gradient: (n, 3, 2).
 
-    Written with the edges from node 1, F = sum_k (x_k - x_1) (x) grad psi_k (the gradients
-    sum to zero): the sum over absolute coordinates would carry a round-off of eps |x| / h (h
-    the element's size), which on a fine mesh far from the origin exceeds the threshold below
-    which a stress counts as zero and makes undeformed elements wrinkle or go slack by noise.
+    Written with the edges from node 1, F = (x_2 - x_1) (x) grad psi_2 + (x_3 - x_1) (x)
+    grad psi_3 (the gradients sum to zero): the sum over absolute coordinates would carry a
+    round-off of eps |x| / h (h the element's size), which on a fine mesh far from the origin
+    exceeds the threshold below which a stress counts as zero and makes undeformed elements
+    wrinkle or go slack by noise.
     """
-    from_first_node = x_elements - x_elements[:, :1, :]  # its first row is exactly zero
-    return np.matmul(from_first_node.transpose(0, 2, 1), shape_gradient)
+    F = np.empty((x_elements.shape[0], 3, 2))
+    grad2, grad3 = shape_gradient[:, 1], shape_gradient[:, 2]
+    # component by component: several times faster than matmul on (3, 3) x (3, 2) batches
+    for i in range(3):
+        x1 = x_elements[:, 0, i]
+        edge2, edge3 = x_elements[:, 1, i] - x1, x_elements[:, 2, i] - x1
+        for a in range(2):
+            F[:, i, a] = edge2 * grad2[:, a] + edge3 * grad3[:, a]
+    return F
 
 
 def right_cauchy_green(F: np.ndarray) -> np.ndarray:
