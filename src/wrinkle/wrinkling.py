@@ -75,6 +75,11 @@ class WrinklingResponse:
     energy: np.ndarray
 
 
+def _row_norms(A: np.ndarray) -> np.ndarray:
+    """Euclidean norm of each row of A (m, k), (m,) (faster than np.linalg.norm(A, axis=1))."""
+    return np.sqrt(np.einsum("ij,ij->i", A, A))
+
+
 def _symmetric_eigenvalues(T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Minor and major eigenvalues of symmetric (n, 2, 2) tensors."""
     mean = 0.5 * (T[:, 0, 0] + T[:, 1, 1])
@@ -98,9 +103,8 @@ def _cauchy_green(e0: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
     return C
 
 
-def _modified_tensor(C: np.ndarray, phi: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """C' = C + b w (x) w, (n, 2, 2)."""
-    c, s = np.cos(phi), np.sin(phi)
+def _modified_tensor(C: np.ndarray, c: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """C' = C + b w (x) w, (n, 2, 2), w = (c, s) = (cos phi, sin phi), each (n,)."""
     bc, bs = b * c, b * s
     out = np.empty_like(C)
     out[:, 0, 0] = C[:, 0, 0] + bc * c
@@ -169,12 +173,12 @@ class Wrinkling:
         if wrinkled.size:
             Cw = C[wrinkled]
             try:
-                phi_w, b_w = self._solve_conditions(
+                phi_w, b_w, (c_w, s_w) = self._solve_conditions(
                     Cw, plain.stress[wrinkled], plain.tangent[wrinkled] if tangent else None
                 )
             except WrinklingError as error:  # rows of the wrinkled subset -> rows of C
                 raise WrinklingError(wrinkled[error.elements]) from None
-            C_modified = _modified_tensor(Cw, phi_w, b_w)
+            C_modified = _modified_tensor(Cw, c_w, s_w, b_w)
             modified = self.material.response(C_modified, tangent=tangent)
             stress[wrinkled] = modified.stress
             thickness[wrinkled] = modified.thickness
@@ -183,25 +187,42 @@ class Wrinkling:
             b[wrinkled] = b_w
             if tangent:
                 stiffness[wrinkled] = self._wrinkled_tangent(
-                    phi_w, b_w, modified.stress, modified.tangent
+                    c_w, s_w, b_w, modified.stress, modified.tangent
                 )
         return WrinklingResponse(state, stress, stiffness, thickness, phi, b, energy)
 
     # -- wrinkled state --------------------------------------------------------------------
     # Vectors and 2x2 / 3x3 matrices are handled as their (m,) component arrays: for batches
     # of tiny matrices, explicit multiply-adds are several times faster than einsum/matmul.
-    def _residual_and_jacobian(self, e: tuple, phi: np.ndarray, b: np.ndarray):
-        """g = N(C') w and J = dg/d(phi, b) of the module docstring, as components.
-
-        e: Voigt strain components (E11, E22, 2 E12), each (m,); phi, b: (m,).
-        Returns (g0, g1), (J00, J01, J10, J11) and the Voigt stress (s0, s1, s2) of C',
-        all (m,).
-        """
-        c, s = np.cos(phi), np.sin(phi)  # w = (c, s); the stress is (s0, s1, s2) below
+    # The wrinkle direction w = (c, s) = (cos phi, sin phi) is passed along with phi, so that
+    # each angle's cosine and sine are computed once.
+    def _modified_response(self, e: tuple, c: np.ndarray, s: np.ndarray, b: np.ndarray,
+                           tangent: bool):
+        """Material response at C' = C + b w (x) w from the Voigt strain e of C (components,
+        each (m,)), w = (c, s), b (m,); also returns m = (w1^2/2, w2^2/2, w1 w2) and c^2, s^2
+        as components."""
         cc, ss, cs = c * c, s * s, c * s
         m0, m1 = 0.5 * cc, 0.5 * ss  # m = (w1^2/2, w2^2/2, w1 w2), m2 = cs
         C = _cauchy_green(e[0] + b * m0, e[1] + b * m1, e[2] + b * cs)
-        modified = self.material.response(C, tangent=True)
+        return self.material.response(C, tangent=tangent), (m0, m1, cs), (cc, ss)
+
+    def _residual(self, e: tuple, c: np.ndarray, s: np.ndarray, b: np.ndarray):
+        """g = N(C') w, as components (g0, g1), and the Voigt stress (s0, s1, s2) of C', all
+        (m,); e, w = (c, s), b as ``_modified_response``."""
+        modified, _, _ = self._modified_response(e, c, s, b, tangent=False)
+        N = modified.stress
+        s0, s1, s2 = N[:, 0, 0], N[:, 1, 1], N[:, 0, 1]
+        return (c * s0 + s * s2, s * s1 + c * s2), (s0, s1, s2)  # W s
+
+    def _residual_and_jacobian(self, e: tuple, c: np.ndarray, s: np.ndarray, b: np.ndarray):
+        """g = N(C') w and J = dg/d(phi, b) of the module docstring, as components.
+
+        e: Voigt strain components (E11, E22, 2 E12), each (m,); w = (c, s) = (cos phi,
+        sin phi), b: (m,).
+        Returns (g0, g1), (J00, J01, J10, J11) and the Voigt stress (s0, s1, s2) of C',
+        all (m,).
+        """
+        modified, (m0, m1, cs), (cc, ss) = self._modified_response(e, c, s, b, tangent=True)
         N, D = modified.stress, modified.tangent
         s0, s1, s2 = N[:, 0, 0], N[:, 1, 1], N[:, 0, 1]
         g0 = c * s0 + s * s2  # W s
@@ -223,10 +244,11 @@ class Wrinkling:
         J11 = d0 * m0 + d1 * m1 + d2 * cs
         return (g0, g1), (J00, J01, J10, J11), (s0, s1, s2)
 
-    def _newton(self, e, phi, b, g_tolerance, active):
+    def _newton(self, e, phi, b, g_tolerance, active, direction=None):
         """Newton iterations on the wrinkling conditions for rows ``active`` (in place);
         converged where |g| <= g_tolerance (m,) or the step is at round-off.
 
+        direction: (cos phi, sin phi) of all rows at the start, if the caller has them.
         The iterations run on compact copies of the rows still active; a row's phi and b are
         written back when it leaves (converged, singular Jacobian or out of iterations).
         """
@@ -237,10 +259,13 @@ class Wrinkling:
         else:
             e_a = tuple(component[idx] for component in e)
             phi_a, b_a, tol_a = phi[idx], b[idx], g_tolerance[idx]
+            direction = None
         for _ in range(_NEWTON_ITERATIONS):
             if idx.size == 0:
                 break
-            (g0, g1), (J00, J01, J10, J11), _ = self._residual_and_jacobian(e_a, phi_a, b_a)
+            c, s = (np.cos(phi_a), np.sin(phi_a)) if direction is None else direction
+            direction = None
+            (g0, g1), (J00, J01, J10, J11), _ = self._residual_and_jacobian(e_a, c, s, b_a)
             # J step = -g by Cramer's rule; a singular J gives a non-finite step
             with np.errstate(divide="ignore", invalid="ignore"):
                 det = J00 * J11 - J01 * J10
@@ -272,7 +297,8 @@ class Wrinkling:
     def _solve_conditions(
         self, C: np.ndarray, plain_stress: np.ndarray, plain_tangent: np.ndarray | None = None
     ):
-        """Angle phi and parameter b of the wrinkled elements, (m,), (m,).
+        """Angle phi and parameter b of the wrinkled elements, (m,), (m,), and the direction
+        (cos phi, sin phi), each (m,).
 
         plain_stress (m, 2, 2) and plain_tangent (m, 3, 3) are the plain law at C; the tangent
         is evaluated here if not given.
@@ -281,9 +307,9 @@ class Wrinkling:
         if plain_tangent is None:
             plain_tangent = self.material.response(C, tangent=True).tangent
         # |g| can be no smaller than round-off in E = (C - I)/2 times the stiffness
-        stiffness = np.linalg.norm(plain_tangent.reshape(-1, 9), axis=1)
+        stiffness = _row_norms(plain_tangent.reshape(-1, 9))
         g_tolerance = np.maximum(
-            self.tolerance * np.linalg.norm(plain_stress.reshape(-1, 4), axis=1),
+            self.tolerance * _row_norms(plain_stress.reshape(-1, 4)),
             64.0 * np.finfo(float).eps * stiffness,
         )
         # first guess: the direction of the most compressive plain stress (exact for isotropy),
@@ -295,9 +321,11 @@ class Wrinkling:
         S00, S11, S01 = plain_stress[:, 0, 0], plain_stress[:, 1, 1], plain_stress[:, 0, 1]
         biaxial = np.flatnonzero((S00 + S11 < 0.0) & (S00 * S11 - S01 * S01 > 0.0))
         phi[biaxial] = _minor_direction_angle(C[biaxial])
-        b = _linearised_b(phi, plain_stress, plain_tangent)
-        converged = self._newton(e, phi, b, g_tolerance, np.ones(phi.shape, dtype=bool))
-        valid = converged & self._admissible(e, phi, b, g_tolerance)
+        c, s = np.cos(phi), np.sin(phi)
+        b = _linearised_b(c, s, plain_stress, plain_tangent)
+        converged = self._newton(e, phi, b, g_tolerance, np.ones(phi.shape, dtype=bool), (c, s))
+        admissible, c, s = self._admissible(e, phi, b, g_tolerance)
+        valid = converged & admissible
         if not np.all(valid):
             # safeguard: global search over the angle for the least relaxed energy, then Newton
             retry = np.flatnonzero(~valid)
@@ -306,23 +334,29 @@ class Wrinkling:
                 e_retry, plain_stress[retry], plain_tangent[retry]
             )
             converged = self._newton(e, phi, b, g_tolerance, ~valid)
-            valid[retry] = converged[retry] & self._admissible(
+            admissible, c[retry], s[retry] = self._admissible(
                 e_retry, phi[retry], b[retry], g_tolerance[retry]
             )
+            valid[retry] = converged[retry] & admissible
             if not np.all(valid):
                 raise WrinklingError(np.flatnonzero(~valid))
-        phi = np.mod(phi, np.pi)
-        return phi, np.maximum(b, 0.0)
+        turned = np.mod(phi, np.pi)
+        moved = np.flatnonzero(turned != phi)  # w -> -w: the direction is recomputed
+        c[moved], s[moved] = np.cos(turned[moved]), np.sin(turned[moved])
+        return turned, np.maximum(b, 0.0), (c, s)
 
-    def _admissible(self, e, phi, b, g_tolerance) -> np.ndarray:
-        """b >= 0 and non-negative uniaxial tension at a solution, (m,) bool."""
-        (g0, g1), _, (s0, s1, _) = self._residual_and_jacobian(e, phi, b)
+    def _admissible(self, e, phi, b, g_tolerance):
+        """b >= 0 and non-negative uniaxial tension at a solution, (m,) bool, and the
+        direction (cos phi, sin phi) there, each (m,)."""
+        c, s = np.cos(phi), np.sin(phi)
+        (g0, g1), (s0, s1, _) = self._residual(e, c, s, b)
         tension = s0 + s1  # trace of the (rank-one) stress
-        return (
+        admissible = (
             (b >= -1e-12)
             & (tension >= -g_tolerance)
             & (np.sqrt(g0 * g0 + g1 * g1) <= 10.0 * g_tolerance)
         )
+        return admissible, c, s
 
     def _angle_search(self, e: tuple, plain_stress: np.ndarray, plain_tangent: np.ndarray):
         """Least relaxed energy over a grid of angles (b by 1-D Newton per angle), (m,), (m,).
@@ -334,12 +368,13 @@ class Wrinkling:
         angles = np.linspace(0.0, np.pi, _GRID_ANGLES, endpoint=False)
         phi = np.tile(angles, n)
         e0, e1, e2 = (np.repeat(component, _GRID_ANGLES) for component in e)
+        c, s = np.cos(phi), np.sin(phi)
         b = _linearised_b(
-            phi,
+            c,
+            s,
             np.repeat(plain_stress, _GRID_ANGLES, axis=0),
             np.repeat(plain_tangent, _GRID_ANGLES, axis=0),
         )
-        c, s = np.cos(phi), np.sin(phi)
         m0, m1, m2 = 0.5 * c * c, 0.5 * s * s, c * s
         # 1-D Newton on the slope w.N'.w of the energy along b, clipped at b = 0; rows stop
         # once their update is at round-off
@@ -364,13 +399,13 @@ class Wrinkling:
         rows = np.arange(n)
         return angles[best], b.reshape(n, _GRID_ANGLES)[rows, best]
 
-    def _wrinkled_tangent(self, phi, b, stress, D) -> np.ndarray:
-        """Consistent dN/dE of wrinkled elements (module docstring), (m, 3, 3).
+    def _wrinkled_tangent(self, c, s, b, stress, D) -> np.ndarray:
+        """Consistent dN/dE of wrinkled elements (module docstring), (m, 3, 3); w = (c, s) =
+        (cos phi, sin phi), b (m,), stress (m, 2, 2) and D (m, 3, 3) the law at C'.
 
         With M = [b m', m] (3 x 2) and J = W D M + [V s, 0]:
         dN/dE = D - (D M) J^-1 (W D), symmetrised.
         """
-        c, s = np.cos(phi), np.sin(phi)
         cc, ss, cs = c * c, s * s, c * s
         m0, m1 = 0.5 * cc, 0.5 * ss
         bcs = b * cs
@@ -415,11 +450,10 @@ def _directional_derivatives(m0, m1, m2, stress, D):
     return slope, curvature
 
 
-def _linearised_b(phi: np.ndarray, stress: np.ndarray, D: np.ndarray) -> np.ndarray:
-    """b solving w.N(e + b m).w = 0 to first order in b, clipped at 0, (m,).
+def _linearised_b(c: np.ndarray, s: np.ndarray, stress: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """b solving w.N(e + b m).w = 0 to first order in b, clipped at 0, (m,); w = (c, s).
 
     stress (m, 2, 2) and D (m, 3, 3): the plain law at e.
     """
-    c, s = np.cos(phi), np.sin(phi)
     slope, curvature = _directional_derivatives(0.5 * c * c, 0.5 * s * s, c * s, stress, D)
     return np.maximum(-slope / curvature, 0.0)
