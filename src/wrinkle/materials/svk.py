@@ -214,9 +214,8 @@ class StVenantKirchhoff:
         R = self.out_of_plane_strain[0]
         E33 = R[0] * e0 + R[1] * e1 + R[2] * e2
         tangent_matrix = None
-        if tangent:
-            tangent_matrix = np.empty((n, 3, 3))
-            tangent_matrix[:] = DQ
+        if tangent:  # np.tile: a few times faster than broadcasting DQ into an empty array
+            tangent_matrix = np.tile(DQ.reshape(1, 9), (n, 1)).reshape(n, 3, 3)
         return MembraneResponse(
             stress=stress,
             tangent=tangent_matrix,
