@@ -1,9 +1,10 @@
 """Compiled kernels (``wrinkle.compiled``, Numba) against the NumPy formulas they replace: the
 element stiffness against ``element.element_stiffness`` with ``strain_displacement``, the
 scatter against ``np.bincount``, the pressure stiffness against
-``loads.subtract_pressure_stiffness``, and a whole evaluation of the airbag (forces, stiffness,
-energy) with and without them, and the rule that chooses them. Skipped where Numba is not
-installed, except the rule."""
+``loads.subtract_pressure_stiffness``, the nodal forces against ``element._nodal_forces``, the
+pressure forces against ``loads.pressure_forces`` summed by ``np.bincount`` (these three bit
+for bit), and a whole evaluation of the airbag (forces, stiffness, energy) with and without
+them, and the rule that chooses them. Skipped where Numba is not installed, except the rule."""
 
 from __future__ import annotations
 
@@ -14,8 +15,8 @@ import pytest
 
 from wrinkle import compiled
 from wrinkle.case import read_case
-from wrinkle.element import element_stiffness, strain_displacement
-from wrinkle.loads import subtract_pressure_stiffness
+from wrinkle.element import _nodal_forces, element_stiffness, strain_displacement
+from wrinkle.loads import pressure_forces, subtract_pressure_stiffness
 
 needs_numba = pytest.mark.skipif(not compiled.installed(), reason="numba not installed")
 AIRBAG = Path(__file__).resolve().parents[1] / "examples" / "airbag.toml"
@@ -97,3 +98,24 @@ def test_pressure_stiffness_equals_numpy_loop():
     subtract_pressure_stiffness(expected, x, pressure)
     compiled.subtract_pressure_stiffness(K, x, pressure)
     np.testing.assert_array_equal(K, expected)
+
+
+@needs_numba
+def test_nodal_forces_equal_numpy_loop():
+    area, F, grad, _, stress = random_element_data(257, seed=3)
+    expected = _nodal_forces(area, F, grad, stress, np.empty((257, 9)))
+    out = np.full((257, 9), np.nan)
+    compiled.nodal_forces(area, F, grad, stress, out)
+    np.testing.assert_array_equal(out, expected)
+
+
+@needs_numba
+def test_pressure_forces_summed_like_bincount():
+    rng = np.random.default_rng(9)
+    x, pressure = rng.normal(size=(40, 3, 3)), rng.uniform(0.5, 2.0, 40)
+    dofs = (3 * rng.integers(0, 12, size=(40, 3))[:, :, None] + np.arange(3)).reshape(40, 9)
+    f, _ = pressure_forces(x, pressure, stiffness=False)
+    expected = np.zeros(36) + np.bincount(dofs.ravel(), f.ravel(), minlength=36)
+    forces = np.zeros(36)
+    compiled.add_pressure_forces(forces, dofs, x, pressure)
+    np.testing.assert_array_equal(forces, expected)

@@ -7,13 +7,21 @@ installed (extra ``fast``); NumPy versions of the same formulas are the fallback
 - ``subtract_pressure_stiffness``: the follower pressure's load stiffness taken from the
   element matrices, the loop of ``wrinkle.loads.subtract_pressure_stiffness`` (54 entries per
   element) in one pass over them instead of 54 strided ones: 0.9 -> 0.13 ms per block of
-  8,192 elements (``benchmarks/element_evaluation.py``).
+  8,192 elements.
+- ``nodal_forces``: the internal nodal forces A0 F N grad psi_k of
+  ``wrinkle.element._nodal_forces``, one element at a time instead of some 50 NumPy passes
+  over a block: 4.7 -> 0.6 ms for 10^5 elements.
+- ``add_pressure_forces``: the follower pressure's nodal forces p c / 6
+  (``wrinkle.loads.pressure_forces``) summed into the global vector in the order of
+  ``np.bincount``, without the (n, 9) element forces: 5.9 -> 0.7 ms for 10^5 elements.
 - ``scatter_add``: data[positions[e, q]] += K[e, q] for every element entry, the sum that
   ``SparsityPattern.add_to_data`` forms with ``np.bincount``.
 
 Measured by ``benchmarks/kernels.py`` (README, Performance), 10^5 / 10^6 elements: forces and
 stiffness of all elements 0.109 -> 0.088 s / 1.55 -> 0.90 s (the wrinkling response around
-them stays NumPy), block-wise assembly 0.035 -> 0.009 s / 0.27 -> 0.10 s.
+them stays NumPy), block-wise assembly 0.035 -> 0.009 s / 0.27 -> 0.10 s; the last three by
+``benchmarks/element_evaluation.py`` on the 10^5-element airbag. All give the NumPy results
+to round-off (the last three bit for bit: same operations in the same order).
 
 Numba is imported, and the kernels compiled (about 1 s, then cached on disk, ``cache=True``),
 at their first use, and they are used from MIN_ELEMENTS elements on, where they save more than
@@ -28,8 +36,8 @@ import os
 
 import numpy as np
 
-__all__ = ["MIN_ELEMENTS", "element_stiffness", "enabled", "installed", "scatter_add",
-           "subtract_pressure_stiffness"]
+__all__ = ["MIN_ELEMENTS", "add_pressure_forces", "element_stiffness", "enabled", "installed",
+           "nodal_forces", "scatter_add", "subtract_pressure_stiffness"]
 
 MIN_ELEMENTS = 10_000
 
@@ -98,6 +106,36 @@ def _subtract_pressure_stiffness(K, x, pressure):
                 K[e, r + 2, c + 1] -= a0
 
 
+def _nodal_forces(area, F, shape_gradient, stress, out):
+    """out[e, 3 k + i] = (A0 F N grad psi_k)_i for each element e; shapes as
+    ``wrinkle.element._nodal_forces``."""
+    for e in range(area.shape[0]):
+        a = area[e]
+        N00, N11, N01 = a * stress[e, 0, 0], a * stress[e, 1, 1], a * stress[e, 0, 1]
+        for i in range(3):
+            F0, F1 = F[e, i, 0], F[e, i, 1]
+            P0 = F0 * N00 + F1 * N01  # row i of A0 F N
+            P1 = F0 * N01 + F1 * N11
+            for k in range(3):
+                out[e, 3 * k + i] = P0 * shape_gradient[e, k, 0] + P1 * shape_gradient[e, k, 1]
+
+
+def _add_pressure_forces(forces, dofs, x, pressure):
+    """forces[dofs[e, 3 k + i]] += p_e c_e[i] / 6 for k = 0, 1, 2, element by element, with
+    c = (x2 - x1) x (x3 - x1) as ``wrinkle.kinematics.cross`` forms it."""
+    for e in range(x.shape[0]):
+        q = pressure[e] / 6.0
+        a0, a1, a2 = x[e, 1, 0] - x[e, 0, 0], x[e, 1, 1] - x[e, 0, 1], x[e, 1, 2] - x[e, 0, 2]
+        b0, b1, b2 = x[e, 2, 0] - x[e, 0, 0], x[e, 2, 1] - x[e, 0, 1], x[e, 2, 2] - x[e, 0, 2]
+        f0 = q * (a1 * b2 - a2 * b1)
+        f1 = q * (a2 * b0 - a0 * b2)
+        f2 = q * (a0 * b1 - a1 * b0)
+        for k in range(3):
+            forces[dofs[e, 3 * k]] += f0
+            forces[dofs[e, 3 * k + 1]] += f1
+            forces[dofs[e, 3 * k + 2]] += f2
+
+
 def _scatter_add(data, positions, values):
     """data[positions[e, q]] += values[e, q], (m, 81) each, in place."""
     for e in range(positions.shape[0]):
@@ -116,6 +154,8 @@ def _compiled(name: str):
         jit = numba.njit(cache=True, boundscheck=False)
         _kernels.update(element_stiffness=jit(_element_stiffness),
                         subtract_pressure_stiffness=jit(_subtract_pressure_stiffness),
+                        nodal_forces=jit(_nodal_forces),
+                        add_pressure_forces=jit(_add_pressure_forces),
                         scatter_add=jit(_scatter_add))
     return _kernels[name]
 
@@ -139,6 +179,29 @@ def subtract_pressure_stiffness(K: np.ndarray, x: np.ndarray, pressure: np.ndarr
     pressure (m,); the formula of ``wrinkle.loads.subtract_pressure_stiffness``."""
     _compiled("subtract_pressure_stiffness")(
         K, np.ascontiguousarray(x), np.ascontiguousarray(pressure, dtype=float)
+    )
+
+
+def nodal_forces(area: np.ndarray, F: np.ndarray, shape_gradient: np.ndarray,
+                 stress: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """Internal nodal forces A0 F N grad psi_k written into out, (m, 9); area (m,),
+    F (m, 3, 2), shape_gradient (m, 3, 2), stress N (m, 2, 2) resultant; the formula of
+    ``wrinkle.element._nodal_forces``."""
+    _compiled("nodal_forces")(
+        np.ascontiguousarray(area), np.ascontiguousarray(F), np.ascontiguousarray(shape_gradient),
+        np.ascontiguousarray(stress), out,
+    )
+    return out
+
+
+def add_pressure_forces(forces: np.ndarray, dofs: np.ndarray, x: np.ndarray,
+                        pressure: np.ndarray) -> None:
+    """Add the follower pressure's nodal forces of m triangles to the global vector forces
+    (n_dofs,) in place: dofs (m, 9) their degrees of freedom, x (m, 3 nodes, 3) current
+    coordinates, pressure (m,); ``wrinkle.loads.pressure_forces`` summed by ``np.bincount``."""
+    _compiled("add_pressure_forces")(
+        forces, np.ascontiguousarray(dofs), np.ascontiguousarray(x),
+        np.ascontiguousarray(pressure, dtype=float),
     )
 
 

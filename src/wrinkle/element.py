@@ -206,15 +206,19 @@ class MembraneElements:
             forces = np.empty((m, 9))
         if stiffness and K is None:
             K = np.empty((min(m, KERNEL_BLOCK) if sink else m, 9, 9))
+        use_compiled = compiled.enabled(g.n_elements)
         for start in range(0, m, KERNEL_BLOCK):
             sub = slice(start, min(start + KERNEL_BLOCK, m))
             mesh_sub = slice(elements.start + sub.start, elements.start + sub.stop)
             area, grad = g.area[mesh_sub], g.shape_gradient[mesh_sub]
             F_sub, stress = F[sub], response.stress[sub]
-            _nodal_forces(area, F_sub, grad, stress, forces[sub])
+            if use_compiled:
+                compiled.nodal_forces(area, F_sub, grad, stress, forces[sub])
+            else:
+                _nodal_forces(area, F_sub, grad, stress, forces[sub])
             if stiffness:
                 out = K[:sub.stop - sub.start] if sink else K[sub]
-                if compiled.enabled(g.n_elements):
+                if use_compiled:
                     compiled.element_stiffness(area, F_sub, grad, response.tangent[sub], stress,
                                                out)
                 else:

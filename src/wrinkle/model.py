@@ -391,9 +391,13 @@ class Model:
             else:
                 x = x_elements[loaded]
             pressure = load_factor * self._pressure[loaded]
-            f, _ = pressure_forces(x, pressure, stiffness=False)
-            forces += np.bincount(self.pattern.element_dofs[loaded].ravel(), f.ravel(),
-                                  minlength=self.n_dofs)
+            if compiled.enabled(self.mesh.n_elements):
+                compiled.add_pressure_forces(forces, self.pattern.element_dofs[loaded], x,
+                                             pressure)
+            else:
+                f, _ = pressure_forces(x, pressure, stiffness=False)
+                forces += np.bincount(self.pattern.element_dofs[loaded].ravel(), f.ravel(),
+                                      minlength=self.n_dofs)
             for start in range(0, x.shape[0], KERNEL_BLOCK) if stiffness and pressure_stiffness \
                     else ():
                 block = slice(start, min(start + KERNEL_BLOCK, x.shape[0]))
