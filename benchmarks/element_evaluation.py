@@ -63,6 +63,7 @@ PARTS = [
     ("wrinkle.materials.neo_hookean", "NeoHookean.energy", "material energy (neo-Hookean)"),
     ("wrinkle.element", "MembraneElements._forces_and_stiffness", "kernel sub-blocks (rest)"),
     ("wrinkle.element", "_nodal_forces", "nodal forces"),
+    ("wrinkle.compiled", "nodal_forces", "nodal forces"),
     ("wrinkle.compiled", "element_stiffness", "element stiffness (Numba)"),
     ("wrinkle.element", "element_stiffness", "element stiffness (NumPy)"),
     ("wrinkle.element", "strain_displacement", "B matrix (NumPy)"),
@@ -246,7 +247,7 @@ def print_tables(results: list[tuple[str, dict]]) -> None:
         line = "".join(f"{r['states'][key]['K']:14.1f}{r['states'][key]['f']:14.1f}"
                        for _, r in results)
         print(f"{'evaluate (uninstrumented)':<{width}}{line}")
-        labels = [label for *_, label in PARTS
+        labels = [label for label in dict.fromkeys(label for *_, label in PARTS)
                   if any(label in r["states"][key].get(f"parts {s}", {})
                          for _, r in results for s in "Kf")]
         for label in labels:
