@@ -2,8 +2,8 @@
 element stiffness against ``element.element_stiffness`` with ``strain_displacement``, the
 scatter against ``np.bincount``, the pressure stiffness against
 ``loads.subtract_pressure_stiffness``, the nodal forces against ``element._nodal_forces``, the
-pressure forces against ``loads.pressure_forces`` summed by ``np.bincount`` (these three bit
-for bit), and a whole evaluation of the airbag (forces, stiffness, energy) with and without
+pressure forces against ``loads.pressure_forces`` summed by ``np.bincount``, the wrinkled
+tangent against ``Wrinkling._wrinkled_tangent`` (these four bit for bit), and a whole evaluation of the airbag (forces, stiffness, energy) with and without
 them, and the rule that chooses them. Skipped where Numba is not installed, except the rule."""
 
 from __future__ import annotations
@@ -17,6 +17,8 @@ from wrinkle import compiled
 from wrinkle.case import read_case
 from wrinkle.element import _nodal_forces, element_stiffness, strain_displacement
 from wrinkle.loads import pressure_forces, subtract_pressure_stiffness
+from wrinkle.materials import StVenantKirchhoff
+from wrinkle.wrinkling import Wrinkling
 
 needs_numba = pytest.mark.skipif(not compiled.installed(), reason="numba not installed")
 AIRBAG = Path(__file__).resolve().parents[1] / "examples" / "airbag.toml"
@@ -119,3 +121,15 @@ def test_pressure_forces_summed_like_bincount():
     forces = np.zeros(36)
     compiled.add_pressure_forces(forces, dofs, x, pressure)
     np.testing.assert_array_equal(forces, expected)
+
+
+@needs_numba
+def test_wrinkled_tangent_equals_numpy_formula():
+    rng = np.random.default_rng(4)
+    phi = rng.uniform(0.0, np.pi, 101)
+    b = rng.uniform(0.0, 0.1, 101)
+    _, _, _, D, stress = random_element_data(101, seed=6)
+    wrinkling = Wrinkling(StVenantKirchhoff.isotropic(E=1.0, nu=0.3, thickness=1.0))
+    arguments = (np.cos(phi), np.sin(phi), b, stress, D)
+    np.testing.assert_array_equal(compiled.wrinkled_tangent(*arguments),
+                                  wrinkling._wrinkled_tangent(*arguments))

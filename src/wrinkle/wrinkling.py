@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wrinkle import compiled
 from wrinkle.materials.base import Material
 
 TAUT, WRINKLED, SLACK = 0, 1, 2
@@ -185,8 +186,10 @@ class Wrinkling:
             energy[wrinkled] = self.material.energy(C_modified)
             phi[wrinkled] = phi_w
             b[wrinkled] = b_w
-            if tangent:
-                stiffness[wrinkled] = self._wrinkled_tangent(
+            if tangent:  # compiled (the same operations) on batches where Numba serves
+                wrinkled_tangent = (compiled.wrinkled_tangent if compiled.enabled(n)
+                                    else self._wrinkled_tangent)
+                stiffness[wrinkled] = wrinkled_tangent(
                     c_w, s_w, b_w, modified.stress, modified.tangent
                 )
         return WrinklingResponse(state, stress, stiffness, thickness, phi, b, energy)
