@@ -57,6 +57,7 @@ PARTS = [
     ("wrinkle.wrinkling", "Wrinkling._residual", "wrinkled: residual (admissibility)"),
     ("wrinkle.wrinkling", "Wrinkling._angle_search", "wrinkled: angle search"),
     ("wrinkle.wrinkling", "Wrinkling._wrinkled_tangent", "wrinkled tangent"),
+    ("wrinkle.compiled", "wrinkled_tangent", "wrinkled tangent"),
     ("wrinkle.materials.svk", "StVenantKirchhoff.response", "material response (SVK)"),
     ("wrinkle.materials.svk", "StVenantKirchhoff.energy", "material energy (SVK)"),
     ("wrinkle.materials.neo_hookean", "NeoHookean.response", "material response (neo-Hookean)"),
