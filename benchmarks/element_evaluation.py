@@ -123,10 +123,15 @@ def make_states(path: Path, nx: int, iterations: list[int]) -> None:
     calls = np.array(calls)
     newton = max(iterations)
     with_k, without_k = int(calls[:, 1].sum()), int((1 - calls[:, 1]).sum())
+    # between two iterations' log lines, the last evaluation with stiffness is the accepted
+    # point; the others are trial points that were rejected
+    per_interval = np.bincount(calls[:, 0] + 1, weights=calls[:, 1]).astype(int)
+    rejected = int(np.sum(np.maximum(per_interval - 1, 0)))
     print(f"saved {sorted(saved)} to {path}")
     print(f"{newton} Newton iterations: {with_k} evaluations with stiffness "
-          f"({with_k / newton:.2f} per iteration), {without_k} without "
-          f"({without_k / newton:.2f} per iteration)")
+          f"({with_k / newton:.2f} per iteration; {rejected} of them, "
+          f"{rejected / newton:.2f} per iteration, at rejected trial points), {without_k} "
+          f"without ({without_k / newton:.2f} per iteration)")
 
 
 # -- timing -----------------------------------------------------------------------------

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import wrinkle
+import wrinkle.compiled
 import wrinkle.element
 import wrinkle.model
 from wrinkle.loads import (
@@ -159,6 +160,36 @@ def test_model_stiffness_with_follower_loads_matches_finite_difference(monkeypat
         fd[:, j] = -(problem.evaluate(u + du, False).residual - problem.evaluate(u - du, False).residual)[free] / (2 * h)
     assert not problem.symmetric
     np.testing.assert_allclose(K[np.ix_(free, free)], fd, atol=1e-6 * np.abs(fd).max())
+
+
+@pytest.mark.parametrize("numba", ["0", "1"])
+def test_pressure_on_some_elements_equals_element_by_element_sums(monkeypatch, numba):
+    """Pressure on every other element: the follower forces, their load stiffness taken from
+    the element matrices and the pressure work, with the element coordinates gathered or given
+    and with or without the compiled kernels, equal sums over the loaded elements."""
+    if numba == "1" and not wrinkle.compiled.installed():
+        pytest.skip("numba not installed")
+    monkeypatch.setenv("WRINKLE_NUMBA", numba)
+    mesh, model = _model(3)
+    loaded = np.arange(mesh.n_elements)[::2]
+    model.add_pressure(0.5, elements=loaded)
+    X = mesh.nodes
+    u = np.column_stack([0.05 * X[:, 0], 0.03 * X[:, 1], 0.2 * np.sin(X[:, 0]) * X[:, 1]]).ravel()
+    x = model.element_coordinates(u)
+    f, K = pressure_forces(x[loaded], np.full(loaded.size, 0.5))
+    expected = np.zeros(model.n_dofs)
+    np.add.at(expected, model.pattern.element_dofs[loaded], f)
+    for given in (None, x):
+        forces, _ = model.follower_forces(u, 1.0, stiffness=False, x_elements=given)
+        np.testing.assert_allclose(forces, expected, rtol=1e-14, atol=1e-15)
+        assert model.pressure_work(u, x_elements=given) == pytest.approx(
+            0.5 * pressure_volume(x[loaded]).sum(), rel=1e-14)
+    matrices = RNG.normal(size=(mesh.n_elements, 9, 9))
+    subtracted = matrices.copy()
+    model.subtract_pressure_stiffness(subtracted, x, slice(0, mesh.n_elements), 1.0)
+    expected_matrices = matrices.copy()
+    expected_matrices[loaded] -= K
+    np.testing.assert_allclose(subtracted, expected_matrices, rtol=0, atol=1e-14)
 
 
 def test_materials_per_region():

@@ -367,8 +367,11 @@ class Model:
         return _concatenate_results(results, self._inverse_order)
 
     def _pressurised(self):
-        """The elements under pressure, as indices, or a slice if they are all of them."""
+        """The elements under pressure: their indices, a slice if they are all of them, None if
+        there are none."""
         loaded = np.flatnonzero(self._pressure)
+        if loaded.size == 0:
+            return None
         return slice(0, loaded.size) if loaded.size == self.mesh.n_elements else loaded
 
     def follower_forces(self, u: np.ndarray, load_factor: float, stiffness: bool = True,
@@ -385,7 +388,7 @@ class Model:
         blocks = []  # (elements, K) when no sink is given
         sink = stiffness_sink or (lambda elements, k: blocks.append((elements, k.copy())))
         loaded = self._pressurised()
-        if isinstance(loaded, slice) or loaded.size:
+        if loaded is not None:
             if x_elements is None:
                 x = x_nodes[self.mesh.triangles[loaded]]
             else:
@@ -436,7 +439,7 @@ class Model:
         planes through the origin (symmetry planes), otherwise a merit for the solver only.
         x_elements: ``element_coordinates(u)`` if the caller has them."""
         loaded = self._pressurised()
-        if not isinstance(loaded, slice) and loaded.size == 0:
+        if loaded is None:
             return 0.0
         if x_elements is None:
             x = (self.mesh.nodes + u.reshape(-1, 3))[self.mesh.triangles[loaded]]
