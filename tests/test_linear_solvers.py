@@ -5,6 +5,7 @@ and gives the same nonlinear solution as SuperLU. Back-ends that are not install
 from __future__ import annotations
 
 import builtins
+import os
 from pathlib import Path
 
 import numpy as np
@@ -154,6 +155,18 @@ def test_pardiso_symmetric_indefinite_and_general_on_one_pattern():
     for matrix, symmetric in ((A, True), (general, False), (2.0 * A, True)):
         x = backend.factorise(matrix, symmetric)(b)
         assert np.linalg.norm(matrix @ x - b) <= 1e-9 * np.linalg.norm(b)
+
+
+@pytest.mark.skipif(not installed("pardiso"), reason="pypardiso not installed")
+def test_pardiso_lets_the_mkl_threads_sleep(monkeypatch):
+    """Making the PARDISO back-end sets KMP_BLOCKTIME=0 (MKL's threads sleep as soon as a
+    call returns), unless the user has set it."""
+    monkeypatch.delenv("KMP_BLOCKTIME", raising=False)
+    make_linear_solver("pardiso")
+    assert os.environ["KMP_BLOCKTIME"] == "0"
+    monkeypatch.setenv("KMP_BLOCKTIME", "50")
+    make_linear_solver("pardiso")
+    assert os.environ["KMP_BLOCKTIME"] == "50"
 
 
 def test_superlu_solves_complex_and_reports_singular():
