@@ -138,9 +138,9 @@ def _no_spin_wait() -> None:
     """Set KMP_BLOCKTIME=0, unless set: the OpenMP threads of MKL (Intel's runtime) then sleep
     as soon as a PARDISO call returns instead of spinning for 200 ms, which on a 2-core
     machine took a core from the element evaluation and the NumPy work between the solves
-    (airbag, 32,768 elements, 122 iterations, two runs each side by side: elements 5.8 -> 4.2 s,
-    rest 5.1 -> 1.5 s, linear solves unchanged; README, Performance). Read by the runtime when
-    it starts, so set before pypardiso loads MKL."""
+    (airbag, 32,768 elements, 122 iterations, two runs each in turns: elements 7.3 / 5.4 ->
+    3.8 / 4.2 s, rest 5.1 / 5.6 -> 1.4 / 1.6 s, linear solves unchanged; README, Performance).
+    Read by the runtime when it starts, so set before pypardiso loads MKL."""
     os.environ.setdefault("KMP_BLOCKTIME", "0")
 
 
