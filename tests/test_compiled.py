@@ -3,8 +3,9 @@ element stiffness against ``element.element_stiffness`` with ``strain_displaceme
 scatter against ``np.bincount``, the pressure stiffness against
 ``loads.subtract_pressure_stiffness``, the nodal forces against ``element._nodal_forces``, the
 pressure forces against ``loads.pressure_forces`` summed by ``np.bincount``, the wrinkled
-tangent against ``Wrinkling._wrinkled_tangent`` (these four bit for bit), and a whole evaluation of the airbag (forces, stiffness, energy) with and without
-them, and the rule that chooses them. Skipped where Numba is not installed, except the rule."""
+tangent against ``Wrinkling._wrinkled_tangent`` (these four bit for bit), a whole evaluation
+of the airbag (forces, stiffness, energy) with and without them, and the rule that chooses
+them. Skipped where Numba is not installed, except the rule."""
 
 from __future__ import annotations
 
