@@ -374,6 +374,14 @@ class Model:
             return None
         return slice(0, loaded.size) if loaded.size == self.mesh.n_elements else loaded
 
+    def _loaded_coordinates(self, u: np.ndarray, loaded, x_elements: np.ndarray | None):
+        """Current coordinates (m, 3, 3) of the pressurised elements ``loaded`` (from
+        ``_pressurised``): taken from x_elements (``element_coordinates(u)``) if given, else
+        gathered at the displacements u."""
+        if x_elements is not None:
+            return x_elements[loaded]
+        return (self.mesh.nodes + u.reshape(-1, 3))[self.mesh.triangles[loaded]]
+
     def follower_forces(self, u: np.ndarray, load_factor: float, stiffness: bool = True,
                         stiffness_sink=None, pressure_stiffness: bool = True,
                         x_elements: np.ndarray | None = None):
@@ -389,10 +397,7 @@ class Model:
         sink = stiffness_sink or (lambda elements, k: blocks.append((elements, k.copy())))
         loaded = self._pressurised()
         if loaded is not None:
-            if x_elements is None:
-                x = x_nodes[self.mesh.triangles[loaded]]
-            else:
-                x = x_elements[loaded]
+            x = self._loaded_coordinates(u, loaded, x_elements)
             pressure = load_factor * self._pressure[loaded]
             if compiled.enabled(self.mesh.n_elements):
                 compiled.add_pressure_forces(forces, self.pattern.element_dofs[loaded], x,
@@ -441,10 +446,7 @@ class Model:
         loaded = self._pressurised()
         if loaded is None:
             return 0.0
-        if x_elements is None:
-            x = (self.mesh.nodes + u.reshape(-1, 3))[self.mesh.triangles[loaded]]
-        else:
-            x = x_elements[loaded]
+        x = self._loaded_coordinates(u, loaded, x_elements)
         return float(self._pressure[loaded] @ pressure_volume(x))
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
