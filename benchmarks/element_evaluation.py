@@ -199,14 +199,14 @@ def measure(states: Path, nx: int, repeat: int) -> dict:
     from wrinkle.wrinkling import SLACK, WRINKLED
 
     model = airbag_model(nx)
-    problem = model.problem(1.0)
+    problem = model.discretise().at(1.0)
     data = np.load(states)
     out = {"elements": int(model.mesh.n_elements), "states": {}}
     for key in sorted(data.files, key=lambda k: int(k[1:])):
         u = data[key]
         problem.evaluate(u, stiffness=True)  # warm-up (compiles on the first call)
         row = {}
-        result = model.evaluate_elements(u, stiffness=False)
+        result = model.discretise().evaluate_elements(u, stiffness=False)
         state = result.response.state
         row["wrinkled"] = float(np.mean(state == WRINKLED))
         row["slack"] = float(np.mean(state == SLACK))

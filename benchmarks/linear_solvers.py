@@ -57,7 +57,7 @@ def airbag_matrix(n: int, interpolant):
     model = read_case(CASE, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}})
     X = model.mesh.nodes
     u = interpolant(np.column_stack([X[:, 1], X[:, 0]])).ravel()
-    problem = model.problem(1.0)
+    problem = model.discretise().at(1.0)
     evaluation = problem.evaluate(u)
     K = evaluation.stiffness
     diagonal = diagonal_positions(K)

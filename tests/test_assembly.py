@@ -117,8 +117,8 @@ def test_model_stiffness_with_supports_matches_dense_reference(mesh):
     model.fix([0, 3], "xyz")
     model.prescribe([5], (0.1, np.nan, 0.0))
     u = 0.05 * np.random.default_rng(3).normal(size=model.n_dofs)
-    evaluation = model.problem().evaluate(u)
-    elements = model.evaluate_elements(u)
+    evaluation = model.discretise().at().evaluate(u)
+    elements = model.discretise().evaluate_elements(u)
     dense = dense_matrix(mesh.triangles, mesh.n_nodes, elements.stiffness)
     c = model.constrained
     assert np.count_nonzero(c) == 8
@@ -127,7 +127,7 @@ def test_model_stiffness_with_supports_matches_dense_reference(mesh):
     dense[c, c] = 1.0
     assert np.allclose(evaluation.stiffness.toarray(), dense, atol=1e-12 * np.abs(dense).max())
     internal = dense_vector(mesh.triangles, mesh.n_nodes, elements.forces)
-    assert np.allclose(model.internal_forces(u), internal, atol=1e-14)
+    assert np.allclose(model.discretise().internal_forces(u), internal, atol=1e-14)
     assert np.all(evaluation.residual[c] == 0.0)
     assert np.allclose(evaluation.residual[~c], -internal[~c], atol=1e-14)
 

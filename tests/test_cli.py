@@ -256,7 +256,7 @@ def test_fibre_directions_per_region_or_from_cell_data(tmp_path, source):
                      f'[material]\ndirection = "fibre"\n{STRIP_MATERIAL}')
     case = tmp_path / "case.toml"
     case.write_text(materials + STRIP_SUPPORTS)
-    model = wrinkle.read_case(case)
+    model = wrinkle.read_case(case).model
     u = model.solve(tolerance=1e-12).final.displacement.reshape(-1, 3)
     middle = np.isclose(model.mesh.nodes[:, 0], 1.0)
     l1 = brentq(lambda a: 5 * a * (a**2 - 1) - (2.01 - a) * ((2.01 - a) ** 2 - 1), 1.0, 1.01)

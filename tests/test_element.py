@@ -96,17 +96,17 @@ def fd_stiffness(model: Model, u: np.ndarray, h: float) -> np.ndarray:
     Asserts that no element changes state under any perturbation: across a state switch the
     forces are not differentiable and the difference quotient means nothing.
     """
-    state = model.evaluate_elements(u, stiffness=False).response.state
+    state = model.discretise().evaluate_elements(u, stiffness=False).response.state
     K = np.empty((u.size, u.size))
     for j in range(u.size):
         columns = []
         for sign in (1.0, -1.0):
             v = u.copy()
             v[j] += sign * h
-            moved = model.evaluate_elements(v, stiffness=False).response.state
+            moved = model.discretise().evaluate_elements(v, stiffness=False).response.state
             switched = np.flatnonzero(moved != state)
             assert switched.size == 0, f"elements {switched} change state when dof {j} moves"
-            columns.append(model.internal_forces(v))
+            columns.append(model.discretise().internal_forces(v))
         K[:, j] = (columns[0] - columns[1]) / (2.0 * h)
     return K
 
@@ -114,9 +114,9 @@ def fd_stiffness(model: Model, u: np.ndarray, h: float) -> np.ndarray:
 def total_energy(model: Model, u: np.ndarray) -> float:
     """sum over elements of A0 * relaxed energy density, computed from the kinematics."""
     x = MESH.nodes + u.reshape(-1, 3)
-    geometry = model.elements.geometry
+    geometry = model.discretise().elements.geometry
     F = deformation_gradient(element_coordinates(x, MESH.triangles), geometry.shape_gradient)
-    return float(np.sum(geometry.area * model.elements.material.energy(right_cauchy_green(F))))
+    return float(np.sum(geometry.area * model.discretise().elements.material.energy(right_cauchy_green(F))))
 
 
 # --------------------------------------------------------------------------- stiffness
@@ -124,7 +124,7 @@ def total_energy(model: Model, u: np.ndarray) -> float:
 def test_stiffness_is_derivative_of_internal_forces(material_case, state):
     model = make_model(material_case)
     u = displacement(state)
-    evaluation = model.problem().evaluate(u, stiffness=True)  # no supports: the full matrix
+    evaluation = model.discretise().at().evaluate(u, stiffness=True)  # no supports: the full matrix
     check_states(evaluation.states, state)
     K = evaluation.stiffness.toarray()
     K_fd = fd_stiffness(model, u, FD_STEP)
@@ -138,8 +138,8 @@ def test_stiffness_is_derivative_of_internal_forces(material_case, state):
 def test_internal_forces_are_gradient_of_energy(material_case, state):
     model = make_model(material_case)
     u = displacement(state)
-    check_states(model.problem().evaluate(u, stiffness=False).states, state)
-    f = model.internal_forces(u)
+    check_states(model.discretise().at().evaluate(u, stiffness=False).states, state)
+    f = model.discretise().internal_forces(u)
     h = 1e-6 * ELEMENT_SIZE
     gradient = np.empty_like(u)
     for j in range(u.size):
@@ -150,10 +150,10 @@ def test_internal_forces_are_gradient_of_energy(material_case, state):
     error = np.linalg.norm(f - gradient) / np.linalg.norm(f)
     assert error < FD_TOLERANCE, f"relative error {error:.3g}"
     # the element energies reported by the element and the problem are the same energy
-    assert np.sum(model.evaluate_elements(u, stiffness=False).energy) == pytest.approx(
+    assert np.sum(model.discretise().evaluate_elements(u, stiffness=False).energy) == pytest.approx(
         total_energy(model, u), rel=1e-12
     )
-    assert model.problem().evaluate(u, stiffness=False).energy == pytest.approx(
+    assert model.discretise().at().evaluate(u, stiffness=False).energy == pytest.approx(
         total_energy(model, u), rel=1e-12
     )
 
@@ -164,7 +164,7 @@ def test_element_forces_balance(material_case, state):
     """Each element is in equilibrium: nodal forces sum to zero and have zero moment."""
     model = make_model(material_case)
     u = displacement(state)
-    result = model.evaluate_elements(u, stiffness=False)
+    result = model.discretise().evaluate_elements(u, stiffness=False)
     check_states(
         tuple(int(np.count_nonzero(result.response.state == s)) for s in (TAUT, WRINKLED, SLACK)),
         state,
@@ -186,13 +186,13 @@ def test_rigid_rotation_rotates_forces_and_stiffness(material_case, state):
     Q = rotation([-0.7, 1.1, 0.4])
     u = (x - MESH.nodes).ravel()
     u_rotated = (x @ Q.T + np.array([-1.0, 0.5, 2.0]) - MESH.nodes).ravel()
-    before = model.problem().evaluate(u)
-    after = model.problem().evaluate(u_rotated)
+    before = model.discretise().at().evaluate(u)
+    after = model.discretise().at().evaluate(u_rotated)
     assert after.states == before.states
     check_states(before.states, state)
     assert after.energy == pytest.approx(before.energy, rel=1e-12)
-    f = model.internal_forces(u).reshape(-1, 3)
-    f_rotated = model.internal_forces(u_rotated).reshape(-1, 3)
+    f = model.discretise().internal_forces(u).reshape(-1, 3)
+    f_rotated = model.discretise().internal_forces(u_rotated).reshape(-1, 3)
     assert np.allclose(f_rotated, f @ Q.T, rtol=0.0, atol=1e-12 * np.max(np.abs(f)))
     Q_all = np.kron(np.eye(MESH.n_nodes), Q)
     K = before.stiffness.toarray()
@@ -209,7 +209,7 @@ def homogeneous_patch(material, stretch_x: float, stretch_y: float, shear: float
     F[:2, :2] = [[stretch_x, shear], [0.0, stretch_y]]
     u = (mesh.nodes @ F.T - mesh.nodes).ravel()
     model = Model(mesh, material)
-    return model, u, model.internal_forces(u).reshape(-1, 3)
+    return model, u, model.discretise().internal_forces(u).reshape(-1, 3)
 
 
 def edge_resultant(model: Model, forces: np.ndarray, edge: str) -> np.ndarray:
@@ -227,7 +227,7 @@ def test_homogeneous_biaxial_svk_edge_forces():
     E, nu, D0 = 2.0, 0.3, 0.1
     lx, ly = 1.12, 1.05
     model, u, f = homogeneous_patch(StVenantKirchhoff.isotropic(E, nu, D0), lx, ly)
-    assert model.evaluate_elements(u).response.state.tolist() == [TAUT] * 18
+    assert model.discretise().evaluate_elements(u).response.state.tolist() == [TAUT] * 18
     E11, E22 = 0.5 * (lx**2 - 1.0), 0.5 * (ly**2 - 1.0)
     N11 = D0 * E / (1.0 - nu**2) * (E11 + nu * E22)
     N22 = D0 * E / (1.0 - nu**2) * (E22 + nu * E11)
@@ -251,7 +251,7 @@ def test_homogeneous_tension_field_edge_forces(material, uniaxial_stress):
     lateral contraction: a uniaxial tension field, right edge force lambda N11, top edge zero."""
     lx, ly = 1.15, 0.8
     model, u, f = homogeneous_patch(material, lx, ly)
-    assert model.evaluate_elements(u).response.state.tolist() == [WRINKLED] * 18
+    assert model.discretise().evaluate_elements(u).response.state.tolist() == [WRINKLED] * 18
     scale = lx * uniaxial_stress(lx)
     assert np.allclose(f[interior_nodes(model)], 0.0, atol=1e-13 * scale)
     assert np.allclose(edge_resultant(model, f, "right"), [scale, 0.0, 0.0], atol=1e-13 * scale)
@@ -260,7 +260,7 @@ def test_homogeneous_tension_field_edge_forces(material, uniaxial_stress):
 
 def test_homogeneous_slack_patch_has_no_forces_or_stiffness(material_case):
     model, u, f = homogeneous_patch(material_case.material, 0.9, 0.95, shear=0.02)
-    evaluation = model.problem().evaluate(u)
+    evaluation = model.discretise().at().evaluate(u)
     assert evaluation.states == (0, 0, 18)
     assert np.all(f == 0.0)
     assert evaluation.stiffness.count_nonzero() == 0
@@ -273,14 +273,14 @@ def test_unit_tension_stiffness_is_the_dirichlet_energy():
     ``element_stiffness`` with N = I and no material part."""
     mesh = rectangle(2.0, 1.5, 5, 4)
     model = Model(mesh, StVenantKirchhoff.isotropic(1.0, 0.3, thickness=1.0))
-    L = model.pattern.matrix(model.step_metric())
+    L = model.discretise().pattern.matrix(model.discretise().step_metric())
     A = np.array([[0.3, -0.7, 0.0], [1.1, 0.4, 0.0], [-0.2, 0.5, 0.0]])
     u = (mesh.nodes @ A.T).ravel()
     assert u @ (L @ u) == pytest.approx(3.0 * np.sum(A[:, :2] ** 2), rel=1e-12)
     translation = np.tile([0.4, -1.0, 2.0], mesh.n_nodes)
     assert np.abs(L @ translation).max() < 1e-12
 
-    g = model.geometry
+    g = model.discretise().geometry
     F = np.zeros((g.n_elements, 3, 2))
     F[:, :2, :] = np.eye(2)
     B = strain_displacement(F, g.shape_gradient)

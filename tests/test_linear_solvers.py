@@ -119,8 +119,8 @@ def test_a_symmetric_tangent_goes_to_the_back_end_as_symmetric():
     """The assembled tangent of the airbag under follower pressure is symmetric (the Hessian
     of the energy with the pressure potential -p V), although its problem cannot promise it:
     the solver checks and tells the back-end; a non-symmetric matrix stays non-symmetric."""
-    model = read_case(AIRBAG, {"mesh": {"rectangle": {"nx": 8, "ny": 8}}})
-    problem = model.problem(1.0)
+    model = read_case(AIRBAG, {"mesh": {"rectangle": {"nx": 8, "ny": 8}}}).model
+    problem = model.discretise().at(1.0)
     X = model.mesh.nodes
     side = X[:, 0].max()
     u = np.zeros(X.size)
@@ -219,7 +219,7 @@ def test_case_file_names_the_linear_solver(tmp_path):
     text = AIRBAG.read_text().replace('method = "newton"', 'method = "newton"\nlinear_solver = "superlu"')
     case = tmp_path / "airbag.toml"
     case.write_text(text)
-    assert read_case(case).solver_settings["linear_solver"] == "superlu"
+    assert read_case(case).settings.linear_solver == "superlu"
     case.write_text(text.replace('"superlu"', '"mumps"'))
     with pytest.raises(CaseError, match=r"\[solver\]: unknown linear_solver 'mumps'"):
         read_case(case)

@@ -8,7 +8,7 @@ import pytest
 import wrinkle
 import wrinkle.compiled
 import wrinkle.element
-import wrinkle.model
+import wrinkle.system
 from wrinkle.loads import (
     boundary_edges,
     edge_follower_forces,
@@ -138,7 +138,7 @@ def test_model_stiffness_with_follower_loads_matches_finite_difference(monkeypat
     is assembled in blocks of 5 elements from two material groups."""
     if block is not None:
         monkeypatch.setattr(wrinkle.element, "KERNEL_BLOCK", block)
-        monkeypatch.setattr(wrinkle.model, "KERNEL_BLOCK", block)
+        monkeypatch.setattr(wrinkle.system, "KERNEL_BLOCK", block)
     mesh, model = _model(3)
     if block is not None:
         softer = StVenantKirchhoff.isotropic(E=30.0, nu=0.2, thickness=0.1)
@@ -149,7 +149,7 @@ def test_model_stiffness_with_follower_loads_matches_finite_difference(monkeypat
     X = mesh.nodes
     u = np.column_stack([0.05 * X[:, 0], 0.03 * X[:, 1], 0.2 * np.sin(X[:, 0]) * X[:, 1]]).ravel()
     u[model.constrained] = 0.0
-    problem = model.problem(1.0)
+    problem = model.discretise().at(1.0)
     K = problem.evaluate(u).stiffness.toarray()
     free = np.flatnonzero(problem.free)
     h = 1e-6
@@ -175,18 +175,18 @@ def test_pressure_on_some_elements_equals_element_by_element_sums(monkeypatch, n
     model.add_pressure(0.5, elements=loaded)
     X = mesh.nodes
     u = np.column_stack([0.05 * X[:, 0], 0.03 * X[:, 1], 0.2 * np.sin(X[:, 0]) * X[:, 1]]).ravel()
-    x = model.element_coordinates(u)
+    x = model.discretise().element_coordinates(u)
     f, K = pressure_forces(x[loaded], np.full(loaded.size, 0.5))
     expected = np.zeros(model.n_dofs)
-    np.add.at(expected, model.pattern.element_dofs[loaded], f)
+    np.add.at(expected, model.discretise().pattern.element_dofs[loaded], f)
     for given in (None, x):
-        forces, _ = model.follower_forces(u, 1.0, stiffness=False, x_elements=given)
+        forces, _ = model.discretise().follower_forces(u, 1.0, stiffness=False, x_elements=given)
         np.testing.assert_allclose(forces, expected, rtol=1e-14, atol=1e-15)
-        assert model.pressure_work(u, x_elements=given) == pytest.approx(
+        assert model.discretise().pressure_work(u, x_elements=given) == pytest.approx(
             0.5 * pressure_volume(x[loaded]).sum(), rel=1e-14)
     matrices = RNG.normal(size=(mesh.n_elements, 9, 9))
     subtracted = matrices.copy()
-    model.subtract_pressure_stiffness(subtracted, x, slice(0, mesh.n_elements), 1.0)
+    model.discretise().subtract_pressure_stiffness(subtracted, x, slice(0, mesh.n_elements), 1.0)
     expected_matrices = matrices.copy()
     expected_matrices[loaded] -= K
     np.testing.assert_allclose(subtracted, expected_matrices, rtol=0, atol=1e-14)
@@ -214,7 +214,7 @@ def test_materials_per_region():
 
     l1 = brentq(lambda a: 100 * a * (a**2 - 1) - 10 * (2.1 - a) * ((2.1 - a) ** 2 - 1), 1.0, 1.1)
     np.testing.assert_allclose(ux[middle], l1 - 1.0, rtol=1e-9)
-    assert len(model.groups) == 2
+    assert len(model.discretise().groups) == 2
 
 
 def test_inflated_square_airbag_centre_deflection():
@@ -245,7 +245,7 @@ def test_inflated_square_airbag_centre_deflection():
     # the step's reactions, taken from the solver's last evaluation, are the reactions
     # evaluated afresh at the converged displacements (internal minus follower forces)
     np.testing.assert_array_equal(results.final.reactions,
-                                  model.reactions(results.final.displacement, 1.0))
+                                  model.discretise().reactions(results.final.displacement, 1.0))
 
 
 def test_supports_with_one_label_count_a_shared_component_once():

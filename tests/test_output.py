@@ -18,7 +18,7 @@ import wrinkle
 from wrinkle.materials import StVenantKirchhoff
 from wrinkle.model import Results
 from wrinkle.output import ResultWriter, save_results
-from wrinkle.results import element_report
+from wrinkle.post import element_report
 
 meshio = pytest.importorskip("meshio")
 
@@ -130,7 +130,7 @@ def test_reactions_are_the_support_forces(solved, written):
         off_support = np.ones(model.mesh.n_nodes, dtype=bool)
         off_support[np.concatenate([top, bottom])] = False
         assert not np.any(reaction[off_support])
-        internal = model.internal_forces(step.displacement).reshape(-1, 3)
+        internal = model.discretise().internal_forces(step.displacement).reshape(-1, 3)
         top_force = reaction[top].sum(axis=0)
         np.testing.assert_allclose(top_force, internal[top].sum(axis=0), rtol=1e-12)
         np.testing.assert_allclose(

@@ -6,7 +6,7 @@ import pytest
 
 import wrinkle
 from wrinkle.materials import StVenantKirchhoff
-from wrinkle.solvers import ConvergenceError, make_solver
+from wrinkle.solvers import ConvergenceError, make_solver, solve_step, tangent_prediction
 from wrinkle.wrinkling import TAUT
 
 ANISOTROPIC = StVenantKirchhoff.transversely_isotropic(
@@ -28,7 +28,7 @@ def sheet_model(top_displacement, nx=6):
 def solve_history(model, method="newton", tolerance=1e-13, max_iterations=None):
     """Solve from the undeformed sheet with the supports moved (no tangent prediction)."""
     solver = make_solver(method, tolerance=tolerance, max_iterations=max_iterations)
-    problem = model.problem(1.0)
+    problem = model.discretise().at(1.0)
     solved = solver.solve(problem, problem.prescribed.copy())
     return solved.u, solved
 
@@ -69,7 +69,7 @@ def test_both_solvers_converge_from_undeformed_with_slack_regions(method):
     u, solved = solve_history(model, method, tolerance=1e-8)
     _, wrinkled, slack = solved.evaluation.states
     assert slack > 0 and wrinkled > 0
-    reaction = model.internal_forces(u).reshape(-1, 3)[pulled]
+    reaction = model.discretise().internal_forces(u).reshape(-1, 3)[pulled]
     # both methods reach the same equilibrium (reaction force of the pulled node, Newton's)
     np.testing.assert_allclose(reaction, [-0.00160206, 0.05511688, 0.0], rtol=1e-4, atol=1e-7)
 
@@ -88,9 +88,10 @@ def test_reactions_are_derivative_of_energy():
     energies = {}
     u = np.zeros(model.n_dofs)
     for factor in (0.999, 1.001, 1.0):
-        u, solved = model.solve_step(u, factor, solver)
+        solved = solve_step(model.discretise().at(factor), u, solver)
+        u = solved.u
         energies[factor] = solved.evaluation.energy
-    reactions = model.internal_forces(u)
+    reactions = model.discretise().internal_forces(u)
     slope = (energies[1.001] - energies[0.999]) / 0.002
     assert slope == pytest.approx(reactions @ model.prescribed, rel=1e-5)
 
@@ -142,14 +143,15 @@ def test_a_worse_prediction_is_not_used():
     """solve_step keeps the plain start when the predicted state is further from balance."""
     model, homogeneous = homogeneous_square()
     solver = make_solver("newton", tolerance=1e-10)
-    u_half, _ = model.solve_step(np.zeros(model.n_dofs), 0.5, solver)
-    problem = model.problem(1.0)
+    u_half = solve_step(model.discretise().at(0.5), np.zeros(model.n_dofs), solver).u
+    problem = model.discretise().at(1.0)
     plain = solver.solve(problem, np.where(model.constrained, problem.prescribed, u_half))
     bad = u_half + np.random.default_rng(0).normal(scale=0.02, size=model.n_dofs)
-    u, predicted = model.solve_step(u_half, 1.0, solver, predicted=bad)
+    predicted = solve_step(problem, u_half, solver, predicted=bad)
+    u = predicted.u
     assert predicted.iterations == plain.iterations > 0
     good = 2.0 * u_half
-    _, extrapolated = model.solve_step(u_half, 1.0, solver, predicted=good)
+    extrapolated = solve_step(problem, u_half, solver, predicted=good)
     assert extrapolated.iterations == 0
     np.testing.assert_allclose(u, homogeneous, atol=1e-10)
 
@@ -163,15 +165,15 @@ def test_a_step_that_moves_supports_starts_from_the_tangent_prediction():
     model, homogeneous = homogeneous_square(nx=12)
     solver = make_solver("newton", tolerance=1e-10)
     zero = np.zeros(model.n_dofs)
-    predicted = model.tangent_prediction(model.problem(0.2), zero, solver)
+    predicted = tangent_prediction(model.discretise().at(0.2), zero, solver)
     np.testing.assert_allclose(predicted, 0.2 * homogeneous, atol=1e-8)
-    _, solved = model.solve_step(zero, 0.2, solver)
+    solved = solve_step(model.discretise().at(0.2), zero, solver)
     assert solved.iterations <= 1
-    problem = model.problem(0.2)  # from the moved supports alone it takes several
+    problem = model.discretise().at(0.2)  # from the moved supports alone it takes several
     plain = solver.solve(problem, problem.prescribed.copy())
     assert plain.iterations > solved.iterations + 2
     # nothing to predict where no support moves: the first iteration is the prediction
-    assert model.tangent_prediction(model.problem(0.2), predicted, solver) is None
+    assert tangent_prediction(model.discretise().at(0.2), predicted, solver) is None
 
 
 def test_a_start_in_balance_costs_no_stiffness():
@@ -179,7 +181,7 @@ def test_a_start_in_balance_costs_no_stiffness():
     without evaluating (and factorising) the stiffness; otherwise it evaluates the stiffness
     there once."""
     model, homogeneous = homogeneous_square()
-    problem = model.problem(1.0)
+    problem = model.discretise().at(1.0)
     calls = []
     evaluate = problem.evaluate
     problem.evaluate = lambda u, stiffness=True, **options: (
@@ -200,23 +202,23 @@ def test_a_prediction_in_balance_costs_one_evaluation():
     compared with the plain start (two evaluations) and then solved from."""
     model, homogeneous = homogeneous_square()
     calls = []
-    make_problem = model.problem
 
-    def counted_problem(*args, **kwargs):
-        problem = make_problem(*args, **kwargs)
+    def counted_problem():
+        problem = model.discretise().at(1.0)
         evaluate = problem.evaluate
         problem.evaluate = lambda u, stiffness=True, **options: (
             calls.append(stiffness) or evaluate(u, stiffness, **options))
         return problem
 
-    model.problem = counted_problem
     solver = make_solver("newton", tolerance=1e-10)
-    u, solved = model.solve_step(np.zeros(model.n_dofs), 1.0, solver, predicted=homogeneous)
+    solved = solve_step(counted_problem(), np.zeros(model.n_dofs), solver, predicted=homogeneous)
+    u = solved.u
     assert solved.iterations == 0 and calls == [False]
     np.testing.assert_array_equal(u, homogeneous)
     calls.clear()
     off = homogeneous + np.where(model.constrained, 0.0, 1e-3)
-    u, solved = model.solve_step(np.zeros(model.n_dofs), 1.0, solver, predicted=off)
+    solved = solve_step(counted_problem(), np.zeros(model.n_dofs), solver, predicted=off)
+    u = solved.u
     assert calls[:3] == [False, False, True] and solved.iterations > 0
     np.testing.assert_allclose(u, homogeneous, atol=1e-10)
 
@@ -228,7 +230,7 @@ def test_undeformed_elements_far_from_the_origin_are_taut():
     mesh = wrinkle.rectangle(1.0, 1.0, 60, 60)
     mesh.nodes[:, :2] += 300.0
     model = wrinkle.Model(mesh, ANISOTROPIC)
-    result = model.evaluate_elements(np.zeros(model.n_dofs), stiffness=False)
+    result = model.discretise().evaluate_elements(np.zeros(model.n_dofs), stiffness=False)
     assert np.all(result.response.state == TAUT)
     C = np.einsum("nia,nib->nab", result.deformation_gradient, result.deformation_gradient)
     np.testing.assert_allclose(C, np.broadcast_to(np.eye(2), C.shape), atol=1e-13)
@@ -247,13 +249,13 @@ def test_newton_regularises_in_the_unit_tension_metric():
     (s: mean free diagonals, L the model's unit-tension Laplacian), and leaves the constrained
     rows and columns as the identity; without a metric, K + theta s_K I."""
     model = sheet_model(TOP_DISPLACEMENT["wrinkled"])
-    problem = model.problem(1.0)
+    problem = model.discretise().at(1.0)
     u = np.where(model.constrained, problem.prescribed, 0.0)
     u[~model.constrained] = 1e-3 * np.sin(np.arange(np.count_nonzero(~model.constrained)))
     ev = problem.evaluate(u)
     free = problem.free
     K = ev.stiffness.toarray()
-    L = model.pattern.matrix(model.step_metric()).toarray()
+    L = model.discretise().pattern.matrix(model.discretise().step_metric()).toarray()
     s_K = np.mean(np.diag(K)[free])
     s_L = np.mean(np.diag(L)[free])
     theta = 0.37
@@ -277,7 +279,7 @@ def test_step_metric_follows_the_supports():
     zeroed, also after a support is added between solves (its cache is renewed)."""
     model = sheet_model(TOP_DISPLACEMENT["wrinkled"])
     model.solve()
-    L = model.pattern.matrix(model.step_metric()).toarray()
+    L = model.discretise().pattern.matrix(model.discretise().step_metric()).toarray()
 
     def expected():
         held = model.constrained
@@ -286,12 +288,12 @@ def test_step_metric_follows_the_supports():
         zeroed[:, held] = 0.0
         return zeroed
 
-    np.testing.assert_array_equal(model.pattern.matrix(model.problem(1.0).metric).toarray(),
+    np.testing.assert_array_equal(model.discretise().pattern.matrix(model.discretise().at(1.0).metric).toarray(),
                                   expected())
     held_before = np.count_nonzero(model.constrained)
     model.fix(np.flatnonzero(~model.constrained)[:3] // 3, "x")
     assert np.count_nonzero(model.constrained) > held_before
-    np.testing.assert_array_equal(model.pattern.matrix(model.problem(1.0).metric).toarray(),
+    np.testing.assert_array_equal(model.discretise().pattern.matrix(model.discretise().at(1.0).metric).toarray(),
                                   expected())
 
 

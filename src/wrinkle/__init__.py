@@ -1,21 +1,47 @@
 """wrinkle: finite-element analysis of thin membranes that wrinkle.
 
 The method is Roddeman, Drukker, Oomens & Janssen, "The Wrinkling of Thin Membranes, Part II:
-Numerical Analysis", J. Appl. Mech. 54 (1987) 888-892.
+Numerical Analysis", J. Appl. Mech. 54 (1987) 888-892 (docs/method.md).
 """
 
-from wrinkle.case import read_case
+from importlib.metadata import PackageNotFoundError, version
+
+from wrinkle.case import Case, CaseError, read_case
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
-from wrinkle.model import Model, Results
-from wrinkle.point import material_response
-from wrinkle.solvers import ConvergenceError
+from wrinkle.model import Model
+from wrinkle.post import element_report, material_response
+from wrinkle.results import Results, StepResult
+from wrinkle.selectors import select_nodes
+from wrinkle.solvers import ConvergenceError, SolverSettings
 from wrinkle.wrinkling import Wrinkling
 
-__version__ = "0.1.0"
+try:
+    __version__ = version("wrinkle")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree not installed
+    __version__ = "unknown"
 
 __all__ = [
-    "ConvergenceError", "Mesh", "Model", "NeoHookean", "Results", "StVenantKirchhoff",
-    "Wrinkling", "annulus", "cylinder", "disk", "material_response", "read_case", "read_mesh",
-    "rectangle", "sphere",
+    "Case",
+    "CaseError",
+    "ConvergenceError",
+    "Mesh",
+    "Model",
+    "NeoHookean",
+    "Results",
+    "SolverSettings",
+    "StVenantKirchhoff",
+    "StepResult",
+    "Wrinkling",
+    "__version__",
+    "annulus",
+    "cylinder",
+    "disk",
+    "element_report",
+    "material_response",
+    "read_case",
+    "read_mesh",
+    "rectangle",
+    "select_nodes",
+    "sphere",
 ]

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from wrinkle import compiled
+from wrinkle import compiled as kernels
 
 DOFS_PER_NODE = 3
 
@@ -109,17 +109,23 @@ class SparsityPattern:
             self.element_to_data.ravel(), weights=element_matrices.ravel(), minlength=self.nnz
         )
 
-    def add_to_data(self, data: np.ndarray, elements, element_matrices: np.ndarray) -> None:
+    def add_to_data(
+        self,
+        data: np.ndarray,
+        elements: np.ndarray | slice,
+        element_matrices: np.ndarray,
+        compiled: bool = False,
+    ) -> None:
         """Add the (m, 9, 9) matrices of some elements (a slice or indices, repeats allowed)
         into the CSR data array ``data`` (nnz,), in place.
 
         One bincount over the span of data positions the elements touch: for a mesh numbered
         so that neighbouring elements have nearby nodes (gmsh, the generators) a block of
         elements touches a short span; otherwise ``np.add.at``, slower but with the same sums.
-        With Numba on a large mesh (``wrinkle.compiled.enabled``), a compiled loop instead.
+        With ``compiled``, the Numba loop ``wrinkle.compiled.scatter_add`` instead.
         """
-        if compiled.enabled(self.n_elements):
-            compiled.scatter_add(data, self.element_to_data[elements], element_matrices)
+        if compiled:
+            kernels.scatter_add(data, self.element_to_data[elements], element_matrices)
             return
         positions = self.element_to_data[elements].ravel()
         weights = element_matrices.ravel()

@@ -1,23 +1,33 @@
-"""Case files: a membrane analysis described in TOML, read into a ``Model``.
+"""Case files: a membrane analysis described in TOML, read into a ``Case``.
 
 A case has the tables ``[mesh]``, ``[material]`` (or ``[[material]]`` with ``region``),
-``[[support]]``, ``[[load]]``, ``[[probe]]``, ``[solver]`` and ``[output]``; README.md lists
-every key. Every error names the file, the table and the key at fault (``CaseError``).
+``[[support]]``, ``[[load]]``, ``[[probe]]`` and ``[solver]``; docs/case-file.md lists every
+key. Every error names the file, the table and the key at fault (``CaseError``). The ``Case``
+holds the ``Model``, the solver settings, the probes and the units; ``Case.solve()`` and
+``Case.run(out)`` solve it.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import tomllib
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, NoReturn
 
 import numpy as np
 
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
+from wrinkle.output import ResultWriter
+from wrinkle.results import Results, StepResult
 from wrinkle.selectors import evaluate_expression, select_nodes
-from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS
+from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS, ConvergenceError, SolverSettings
+
+__all__ = ["Case", "CaseError", "merged", "read_case", "read_case_data"]
 
 
 class CaseError(ValueError):
@@ -29,12 +39,12 @@ MATERIAL_MODELS = {
     "svk-transverse": ("E_L", "E_T", "nu_LT", "nu_TT", "G_LT"),
     "neo-hookean": ("mu",),
 }
-GENERATORS = {
-    "rectangle": (rectangle, ("width", "height", "nx", "ny"), ()),
-    "disk": (disk, ("outer_radius", "n_radial", "n_circumferential"), ()),
-    "annulus": (annulus, ("inner_radius", "outer_radius", "n_radial", "n_circumferential"), ()),
-    "sphere": (sphere, ("radius", "n"), ()),
-    "cylinder": (cylinder, ("radius", "length", "n_circumferential", "n_axial", "n_cap"), ()),
+GENERATORS: dict[str, tuple[Callable[..., Mesh], tuple[str, ...]]] = {
+    "rectangle": (rectangle, ("width", "height", "nx", "ny")),
+    "disk": (disk, ("outer_radius", "n_radial", "n_circumferential")),
+    "annulus": (annulus, ("inner_radius", "outer_radius", "n_radial", "n_circumferential")),
+    "sphere": (sphere, ("radius", "n")),
+    "cylinder": (cylinder, ("radius", "length", "n_circumferential", "n_axial", "n_cap")),
 }
 LOAD_KINDS = {
     "pressure": ({"value"}, {"region"}),
@@ -42,7 +52,8 @@ LOAD_KINDS = {
     "nodal": ({"nodes", "force"}, set()),
     "gravity": ({"acceleration", "density"}, {"region"}),
 }
-SOLVER_KEYS = {"method", "steps", "tolerance", "max_iterations", "min_step", "linear_solver"}
+SOLVER_KEYS = {"method", "steps", "tolerance", "max_iterations", "min_step", "max_step",
+               "cutback", "growth", "target_iterations", "linear_solver"}
 
 
 class _Reader:
@@ -51,7 +62,7 @@ class _Reader:
     def __init__(self, path: Path):
         self.path = path
 
-    def fail(self, where: str, message: str):
+    def fail(self, where: str, message: str) -> NoReturn:
         raise CaseError(f"{self.path}: {where}: {message}")
 
     def keys(self, table: dict, where: str, required: set, optional: set) -> None:
@@ -136,14 +147,73 @@ def merged(data: dict, overrides: dict) -> dict:
     return out
 
 
-def read_case(path: str | Path, overrides: dict | None = None) -> Model:
-    """Read a TOML case file into a ``Model``.
+@dataclass
+class Case:
+    """A case file read: the model and how to solve it and report it.
 
-    The case's [solver] table becomes ``model.solver_settings`` (the defaults of
-    ``model.solve()``), its probes ``model.probes``, its units ``model.units``, and
-    ``model.source`` is the file. ``overrides``: nested tables merged over the file's (e.g.
-    ``{"mesh": {"rectangle": {"nx": 8}}}`` for a mesh-convergence study). A ``[verification]``
-    table is left to the verification gallery (``model.verification``). Raises CaseError (a
+    model: the ``Model``; settings: the ``SolverSettings`` of the [solver] table; probes:
+    {name: node indices} whose mean displacement the history records; units: labels such as
+    {"length": "m", "force": "N"} for the summary and the pictures; source: the case file;
+    title: its ``title``; verification: its [verification] table (read by the verification
+    gallery only).
+    """
+
+    model: Model
+    settings: SolverSettings = field(default_factory=SolverSettings)
+    probes: dict[str, np.ndarray] = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
+    source: Path | None = None
+    title: str = ""
+    verification: dict[str, Any] = field(default_factory=dict)
+
+    def _label(self, results: Results | None) -> None:
+        if results is not None:
+            results.probes, results.units, results.source = self.probes, self.units, self.source
+
+    def solve(self, on_step: Callable[[StepResult], None] | None = None,
+              **options: Any) -> Results:
+        """Solve the model with the case's settings (``options``: fields of
+        ``SolverSettings`` overriding them); the results carry the case's probes and units.
+        Raises ConvergenceError (its ``results`` labelled the same) if a step fails."""
+        try:
+            results = self.model.solve(self.settings, on_step=on_step, **options)
+        except ConvergenceError as error:
+            self._label(error.results)
+            raise
+        self._label(results)
+        return results
+
+    def run(self, out: str | os.PathLike, on_step: Callable[[StepResult], None] | None = None,
+            **options: Any) -> Results:
+        """Solve and write each converged step into the folder ``out`` as it converges
+        (``wrinkle.output.ResultWriter``), then the final summary; ``on_step`` is called after
+        each step is written. A ConvergenceError or KeyboardInterrupt is raised again after
+        the summary records it; every converged step is on disk."""
+        writer = ResultWriter(out, self.model, probes=self.probes, units=self.units,
+                              case=self.source)
+
+        def write(step: StepResult) -> None:
+            writer.write_step(step)
+            if on_step is not None:
+                on_step(step)
+
+        try:
+            results = self.solve(on_step=write, **options)
+        except ConvergenceError as error:
+            writer.finish(False, f"not converged: {error}")
+            raise
+        except KeyboardInterrupt:
+            writer.finish(False, "interrupted")
+            raise
+        writer.finish(True, "converged to load factor 1")
+        return results
+
+
+def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) -> Case:
+    """Read a TOML case file into a ``Case``.
+
+    overrides: nested tables merged over the file's (e.g. ``{"mesh": {"rectangle": {"nx":
+    8}}}`` for a mesh-convergence study, ``{"solver": {"steps": 4}}``). Raises CaseError (a
     ValueError) naming the file and key for any bad input.
     """
     path = Path(path)
@@ -173,17 +243,18 @@ def read_case(path: str | Path, overrides: dict | None = None) -> Model:
         reader.keys(table, where, {"nodes"}, {"name"})
         name = reader.string(table, "name", where) if "name" in table else table["nodes"]
         probes[str(name)] = reader.nodes(mesh, table, where)
-    solver = _read_solver(reader, data.get("solver", {}))
+    settings = _read_solver(reader, data.get("solver", {}))
     try:
         model.check_supports()
     except ValueError as error:
         reader.fail("[[support]]", str(error))
-    model.solver_settings.update(solver)
-    model.probes = probes
-    model.units = units
-    model.source = path
-    model.verification = data.get("verification", {})
-    return model
+    title = data.get("title", "")
+    if not isinstance(title, str):
+        reader.fail("top level", f"'title' must be a string, got {title!r}")
+    verification = data.get("verification", {})
+    if not isinstance(verification, dict):
+        reader.fail("[verification]", "must be a table")
+    return Case(model, settings, probes, units, path, title, verification)
 
 
 def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:
@@ -209,13 +280,16 @@ def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:
         if source == "file":
             file = folder / reader.string(table, "file", where)
             return read_mesh(file), units
-        generator, keys, _ = GENERATORS[source]
+        generator, keys = GENERATORS[source]
         parameters = table[source]
         sub = f"[mesh] {source}"
         if not isinstance(parameters, dict):
             reader.fail(sub, "must be a table, e.g. {width = 1.0, height = 1.0, nx = 10, ny = 10}")
-        optional = {"inner_radius"} if source == "disk" else set()
-        reader.keys(parameters, sub, set(keys), optional)
+        if source == "disk" and "inner_radius" in parameters:
+            reader.fail(sub, "a disk has no 'inner_radius': for a disk with a hole use [mesh] "
+                             "annulus = {inner_radius, outer_radius, n_radial, "
+                             "n_circumferential}")
+        reader.keys(parameters, sub, set(keys), set())
         values = [reader.number(parameters, key, sub, positive=True, integer=key.startswith("n"))
                   for key in keys]
         return generator(*values), units
@@ -335,12 +409,12 @@ def _read_load(reader: _Reader, model: Model, table: dict, where: str) -> None:
         reader.fail(where, str(error))
 
 
-def _read_solver(reader: _Reader, table: dict) -> dict:
+def _read_solver(reader: _Reader, table: dict) -> SolverSettings:
     where = "[solver]"
     if not isinstance(table, dict):
         reader.fail(where, "must be a table")
     reader.keys(table, where, set(), SOLVER_KEYS)
-    solver = {}
+    solver: dict[str, Any] = {}
     if "method" in table:
         method = reader.string(table, "method", where)
         if method not in SOLVERS:
@@ -352,13 +426,16 @@ def _read_solver(reader: _Reader, table: dict) -> dict:
             reader.fail(where, f"unknown linear_solver '{name}' (one of auto, "
                                f"{', '.join(LINEAR_SOLVERS)})")
         solver["linear_solver"] = name
-    if "steps" in table:
-        solver["steps"] = reader.number(table, "steps", where, integer=True, minimum=1)
-    if "tolerance" in table:
-        solver["tolerance"] = reader.number(table, "tolerance", where, positive=True)
-    if "max_iterations" in table:
-        solver["max_iterations"] = reader.number(table, "max_iterations", where, integer=True,
-                                                 minimum=1)
-    if "min_step" in table:
-        solver["min_step"] = reader.number(table, "min_step", where, positive=True)
-    return solver
+    for key in ("steps", "max_iterations"):
+        if key in table:
+            solver[key] = reader.number(table, key, where, integer=True, minimum=1)
+    if "target_iterations" in table:
+        solver["target_iterations"] = reader.number(table, "target_iterations", where,
+                                                    integer=True, minimum=0)
+    for key in ("tolerance", "min_step", "max_step", "cutback", "growth"):
+        if key in table:
+            solver[key] = float(reader.number(table, key, where, positive=True))
+    try:
+        return SolverSettings(**solver)
+    except ValueError as error:
+        reader.fail(where, str(error))

@@ -31,32 +31,21 @@ def _demo(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from wrinkle.case import read_case
-    from wrinkle.output import ResultWriter
     from wrinkle.progress import Progress
 
-    model = read_case(args.case)
-    writer = ResultWriter(args.out, model, probes=model.probes, units=model.units,
-                          case=args.case)
+    case = read_case(args.case)
     progress = Progress(quiet=args.quiet)
-
-    def on_step(step):
-        writer.write_step(step)
-        progress.step(step)
-
     try:
-        model.solve(on_step=on_step)
+        case.run(args.out, on_step=progress.step)
     except ConvergenceError as error:
         progress.close()
-        writer.finish(False, f"not converged: {error}")
         print(f"wrinkle: {args.case}: not converged: {error}", file=sys.stderr)
         print(f"wrinkle: the converged steps are in {args.out}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         progress.close()
-        writer.finish(False, "interrupted")
         print(f"wrinkle: interrupted; the converged steps are in {args.out}", file=sys.stderr)
         return 130
-    writer.finish(True, "converged to load factor 1")
     if not args.quiet:
         print(f"wrote {args.out}/results.pvd, summary.json, history.csv")
     return 0

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wrinkle import compiled
+from wrinkle import compiled as kernels
 from wrinkle.kinematics import ReferenceGeometry, deformation_gradient, right_cauchy_green
 from wrinkle.wrinkling import Wrinkling, WrinklingError, WrinklingResponse
 
@@ -134,11 +134,16 @@ def unit_tension_stiffness(area: np.ndarray, shape_gradient: np.ndarray) -> np.n
 
 
 class MembraneElements:
-    """All triangles of one material: reference geometry plus the wrinkling material."""
+    """All triangles of one material: reference geometry plus the wrinkling material.
 
-    def __init__(self, geometry: ReferenceGeometry, material: Wrinkling):
+    compiled: whether the element loops run as the Numba kernels of ``wrinkle.compiled``
+    (the same formulas; NumPy if False). The discrete system chooses it once for the mesh.
+    """
+
+    def __init__(self, geometry: ReferenceGeometry, material: Wrinkling, compiled: bool = False):
         self.geometry = geometry
         self.material = material
+        self.compiled = compiled
 
     def evaluate(self, x_elements: np.ndarray, stiffness: bool = True,
                  stiffness_sink=None) -> ElementResult:
@@ -154,7 +159,9 @@ class MembraneElements:
         n = g.n_elements
         if n <= _BLOCK:
             F = deformation_gradient(x_elements, g.shape_gradient)
-            response = self.material.response(right_cauchy_green(F), tangent=stiffness)
+            response = self.material.response(
+                right_cauchy_green(F), tangent=stiffness, compiled=self.compiled
+            )
             forces, K = self._forces_and_stiffness(F, slice(0, n), response, stiffness,
                                                    sink=stiffness_sink)
             return ElementResult(F, response, forces, K, g.area * response.energy)
@@ -176,7 +183,9 @@ class MembraneElements:
             block = slice(start, min(start + _BLOCK, n))
             F_block = deformation_gradient(x_elements[block], g.shape_gradient[block])
             try:
-                r = self.material.response(right_cauchy_green(F_block), tangent=stiffness)
+                r = self.material.response(
+                    right_cauchy_green(F_block), tangent=stiffness, compiled=self.compiled
+                )
             except WrinklingError as error:
                 failed.append(error.elements + start)
                 continue
@@ -206,20 +215,19 @@ class MembraneElements:
             forces = np.empty((m, 9))
         if stiffness and K is None:
             K = np.empty((min(m, KERNEL_BLOCK) if sink else m, 9, 9))
-        use_compiled = compiled.enabled(g.n_elements)
         for start in range(0, m, KERNEL_BLOCK):
             sub = slice(start, min(start + KERNEL_BLOCK, m))
             mesh_sub = slice(elements.start + sub.start, elements.start + sub.stop)
             area, grad = g.area[mesh_sub], g.shape_gradient[mesh_sub]
             F_sub, stress = F[sub], response.stress[sub]
-            if use_compiled:
-                compiled.nodal_forces(area, F_sub, grad, stress, forces[sub])
+            if self.compiled:
+                kernels.nodal_forces(area, F_sub, grad, stress, forces[sub])
             else:
                 _nodal_forces(area, F_sub, grad, stress, forces[sub])
             if stiffness:
                 out = K[:sub.stop - sub.start] if sink else K[sub]
-                if use_compiled:
-                    compiled.element_stiffness(area, F_sub, grad, response.tangent[sub], stress,
+                if self.compiled:
+                    kernels.element_stiffness(area, F_sub, grad, response.tangent[sub], stress,
                                                out)
                 else:
                     B = strain_displacement(F_sub, grad)

@@ -45,13 +45,13 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from wrinkle.results import element_report
+from wrinkle.post import element_report, support_reactions
+from wrinkle.wrinkling import STATE_NAMES
 
 SUMMARY = "summary.json"
 HISTORY = "history.csv"
 COLLECTION = "results.pvd"
 STEP_FILE = re.compile(r"step_\d{4,}\.vtu")
-STATE_NAMES = ("taut", "wrinkled", "slack")
 
 
 def require_meshio():
@@ -131,11 +131,8 @@ class ResultWriter:
             if np.any((nodes < 0) | (nodes >= n_nodes)):
                 raise ValueError(f"probe {name!r}: node indices must lie in 0..{n_nodes - 1}")
             self.probes[str(name)] = nodes.astype(np.int64)
-        self.supports: dict[str, np.ndarray] = {}  # label -> dofs; a repeated label merges
-        for support in getattr(model, "supports", []):
-            label = str(support.label)
-            dofs = np.asarray(support.dofs, dtype=np.int64).ravel()
-            self.supports[label] = np.union1d(self.supports.get(label, dofs), dofs)
+        self.supports = list(getattr(model, "supports", []))
+        self.support_labels = list(dict.fromkeys(str(s.label) for s in self.supports))
         self.units = dict(units) if units else None
         self.case = str(case) if case is not None else None
         self.steps: list[dict] = []
@@ -158,10 +155,7 @@ class ResultWriter:
         self._write_vtu(path, step)
         u = np.asarray(step.displacement, dtype=float).reshape(-1, 3)
         reactions = np.asarray(step.reactions, dtype=float)
-        support_forces = {
-            label: np.bincount(dofs % 3, reactions[dofs], minlength=3)
-            for label, dofs in self.supports.items()
-        }
+        support_forces = support_reactions(self.supports, reactions)
         probe_means = {name: u[nodes].mean(axis=0) for name, nodes in self.probes.items()}
         states = [int(s) for s in step.states]
         self.steps.append({
@@ -171,13 +165,13 @@ class ResultWriter:
             "iterations": int(step.iterations),
             "residual": float(step.residual),
             "states": dict(zip(STATE_NAMES, states)),
-            "reactions": {label: force.tolist() for label, force in support_forces.items()},
+            "reactions": support_forces,
             "max_displacement": float(np.linalg.norm(u, axis=1).max(initial=0.0)),
         })
         row = [index, float(step.load_factor), int(step.iterations), float(step.residual)]
         row += states
         for force in support_forces.values():
-            row += force.tolist()
+            row += force
         for mean in probe_means.values():
             row += mean.tolist()
         self.rows.append(row)
@@ -231,7 +225,7 @@ class ResultWriter:
     def history_header(self) -> list[str]:
         """Column names of history.csv."""
         header = ["step", "load_factor", "iterations", "residual", *STATE_NAMES]
-        for label in self.supports:
+        for label in self.support_labels:
             header += [f"{label}_Fx", f"{label}_Fy", f"{label}_Fz"]
         for name in self.probes:
             header += [f"{name}_ux", f"{name}_uy", f"{name}_uz"]

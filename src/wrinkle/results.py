@@ -1,122 +1,97 @@
-"""What the analysis reports per element: state, directions, wrinkling strain, stresses.
-
-Directions follow the paper (Roddeman et al. 1987, Part II, section 2): the wrinkle direction
-n1 is the direction across the wrinkles, in which the membrane is shortened by the wrinkling
-strain beta (F' = (I + beta n1 (x) n1) F); the tension direction n2 is the direction of the
-uniaxial tension, along the wrinkle crests. In the reference plane they are w (with
-C' = C + b w (x) w) and v, w turned by 90 degrees; in the current configuration
-n1 = F C^-1 w / |F C^-1 w| and n2 = F v / |F v|. The wrinkling strain is
-beta = sqrt(1 + b w.C^-1.w) - 1, from b = ((1 + beta)^2 - 1) |F^T n1|^2 and
-|F^T n1|^2 = 1 / (w.C^-1.w) (METHOD.md section 4).
-"""
+"""The results of a solve: the converged load steps, in order (``Results``, ``StepResult``)."""
 
 from __future__ import annotations
 
+import os
+from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wrinkle.kinematics import right_cauchy_green
-from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, WrinklingResponse
+from wrinkle.output import save_results
+from wrinkle.solvers.base import SolverResult
+from wrinkle.timing import Stopwatch
 
+if TYPE_CHECKING:
+    from wrinkle.model import Model
 
-def _inverse2(C: np.ndarray) -> np.ndarray:
-    det = C[:, 0, 0] * C[:, 1, 1] - C[:, 0, 1] * C[:, 1, 0]
-    inv = np.empty_like(C)
-    inv[:, 0, 0] = C[:, 1, 1]
-    inv[:, 1, 1] = C[:, 0, 0]
-    inv[:, 0, 1] = -C[:, 0, 1]
-    inv[:, 1, 0] = -C[:, 1, 0]
-    return inv / det[:, None, None]
+__all__ = ["Results", "StepResult"]
 
 
 @dataclass
-class PlaneQuantities:
-    """Reported quantities of n points in the material frame (2-D).
+class StepResult:
+    """One converged load step: load factor, displacements (n_dofs,), solver information.
 
-    tension_direction: (n, 2) reference direction of the (major) tension: v if wrinkled, the
-        major principal stress direction if taut, zero if slack.
-    wrinkle_direction: (n, 2) reference direction w across the wrinkles; zero unless wrinkled.
-    wrinkling_strain: (n,) beta >= 0; zero unless wrinkled.
-    principal_stress: (n, 2) minor and major principal Cauchy stress resultants, force per
-        unit current length (eigenvalues of N C / sqrt(det C)).
+    reactions: (n_dofs,) internal minus external force, nonzero at the supports (force);
+    states: (taut, wrinkled, slack) element counts.
     """
 
-    tension_direction: np.ndarray
-    wrinkle_direction: np.ndarray
-    wrinkling_strain: np.ndarray
-    principal_stress: np.ndarray
+    load_factor: float
+    displacement: np.ndarray
+    iterations: int
+    residual: float
+    reactions: np.ndarray
+    states: tuple[int, int, int]
 
 
-def plane_quantities(C: np.ndarray, response: WrinklingResponse) -> PlaneQuantities:
-    """Directions, wrinkling strain and principal stresses from C (n, 2, 2) and the response."""
-    state = response.state
-    N = response.stress
-    phi = response.wrinkle_angle
-    w = np.stack([np.cos(phi), np.sin(phi)], axis=-1)
-    v = np.stack([-np.sin(phi), np.cos(phi)], axis=-1)
-    major = 0.5 * np.arctan2(2.0 * N[:, 0, 1], N[:, 0, 0] - N[:, 1, 1])
-    tension = np.where(
-        (state == TAUT)[:, None], np.stack([np.cos(major), np.sin(major)], axis=-1), v
-    )
-    tension[state == SLACK] = 0.0
-    wrinkle = np.where((state == WRINKLED)[:, None], w, 0.0)
-    C_inv = _inverse2(C)
-    wCw = np.einsum("ni,nij,nj->n", w, C_inv, w)
-    beta = np.where(
-        state == WRINKLED, np.sqrt(1.0 + response.wrinkle_parameter * wCw) - 1.0, 0.0
-    )
-    NC = np.matmul(N, C)
-    half_trace = 0.5 * (NC[:, 0, 0] + NC[:, 1, 1])
-    det = NC[:, 0, 0] * NC[:, 1, 1] - NC[:, 0, 1] * NC[:, 1, 0]
-    root = np.sqrt(np.maximum(half_trace**2 - det, 0.0))
-    area_stretch = np.sqrt(C[:, 0, 0] * C[:, 1, 1] - C[:, 0, 1] ** 2)
-    principal = np.stack([half_trace - root, half_trace + root], axis=-1) / area_stretch[:, None]
-    return PlaneQuantities(tension, wrinkle, beta, principal)
+class Results:
+    """Converged load steps of a model, in order.
 
-
-@dataclass
-class ElementReport:
-    """Per-element results of a model at one configuration (n elements).
-
-    state: (n,) 0 taut, 1 wrinkled, 2 slack; stress: (n, 2, 2) stress resultant N, material
-    frame, force per unit reference length; principal_stress: (n, 2) Cauchy resultants, force
-    per unit current length; thickness: (n,); wrinkling_strain: (n,) beta;
-    tension_direction, wrinkle_direction: (n, 3) unit vectors in the current configuration
-    (zero where not defined); reference_tension_direction, reference_wrinkle_direction: (n, 3)
-    the same in the reference configuration.
+    probes ({name: node indices}) and units ({"length": "m", ...}) go into the files that
+    ``save`` writes; source: the case file the model came from, if any (``Case.solve`` sets
+    the three).
     """
 
-    state: np.ndarray
-    stress: np.ndarray
-    principal_stress: np.ndarray
-    thickness: np.ndarray
-    wrinkling_strain: np.ndarray
-    tension_direction: np.ndarray
-    wrinkle_direction: np.ndarray
-    reference_tension_direction: np.ndarray
-    reference_wrinkle_direction: np.ndarray
+    def __init__(self, model: Model):
+        self.model = model
+        self.steps: list[StepResult] = []
+        self.stopwatch = Stopwatch()
+        self.probes: dict[str, np.ndarray] = {}
+        self.units: dict[str, str] = {}
+        self.source: Path | None = None
 
+    @property
+    def timings(self) -> dict[str, float]:
+        """Wall seconds so far in element evaluation, assembly, linear solves, the rest, and
+        in total (``wrinkle.timing``)."""
+        return self.stopwatch.summary()
 
-def _unit(vectors: np.ndarray) -> np.ndarray:
-    length = np.linalg.norm(vectors, axis=1)
-    return vectors / np.where(length > 0, length, 1.0)[:, None]
+    def append(self, load_factor: float, u: np.ndarray, solved: SolverResult) -> StepResult:
+        """Add the converged step u (n_dofs,); its reactions come from the solver's last
+        evaluation, at u, where it has them."""
+        ev = solved.evaluation
+        reactions = ev.reactions
+        if reactions is None:
+            reactions = self.model.discretise().reactions(u, load_factor)
+        step = StepResult(
+            load_factor, u.copy(), solved.iterations, ev.residual_norm, reactions, ev.states,
+        )
+        self.steps.append(step)
+        return step
 
+    def save(
+        self,
+        directory: str | os.PathLike,
+        probes: Mapping[str, np.ndarray] | None = None,
+        units: Mapping[str, str] | None = None,
+    ) -> Path:
+        """Write every step (ParaView files, summary.json, history.csv) into ``directory``;
+        probes and units default to the results' own (from a case file). Returns the
+        directory."""
+        return save_results(
+            self,
+            directory,
+            probes=self.probes if probes is None else probes,
+            units=self.units if units is None else units,
+            case=self.source,
+        )
 
-def element_report(model, u: np.ndarray) -> ElementReport:
-    """Per-element results of ``model`` at displacements u, (n_dofs,)."""
-    result = model.evaluate_elements(u, stiffness=False)
-    F = result.deformation_gradient
-    C = right_cauchy_green(F)
-    q = plane_quantities(C, result.response)
-    frame = model.geometry.frame  # (n, 2, 3)
-    reference_tension = np.einsum("na,nai->ni", q.tension_direction, frame)
-    reference_wrinkle = np.einsum("na,nai->ni", q.wrinkle_direction, frame)
-    tension = _unit(np.einsum("nia,na->ni", F, q.tension_direction))
-    wrinkle_plane = np.einsum("nab,nb->na", _inverse2(C), q.wrinkle_direction)
-    wrinkle = _unit(np.einsum("nia,na->ni", F, wrinkle_plane))
-    r = result.response
-    return ElementReport(
-        r.state, r.stress, q.principal_stress, r.thickness, q.wrinkling_strain,
-        tension, wrinkle, reference_tension, reference_wrinkle,
-    )
+    @property
+    def final(self) -> StepResult:
+        """The last converged step."""
+        return self.steps[-1]
+
+    def __len__(self) -> int:
+        return len(self.steps)

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wrinkle import compiled
+from wrinkle import compiled as kernels
 from wrinkle.materials.base import Material
 
 TAUT, WRINKLED, SLACK = 0, 1, 2
@@ -149,7 +149,12 @@ class Wrinkling:
         state[compressed & (major_stretch <= 1.0 + 64.0 * np.finfo(float).eps)] = SLACK
         return state
 
-    def response(self, C: np.ndarray, tangent: bool = True) -> WrinklingResponse:
+    def response(
+        self, C: np.ndarray, tangent: bool = True, compiled: bool = False
+    ) -> WrinklingResponse:
+        """Relaxed response at C (n, 2, 2), material frame: state, stress, consistent tangent
+        (if ``tangent``), thickness, wrinkle angle and parameter, energy. compiled: the
+        wrinkled elements' tangent by the Numba kernel (the same operations)."""
         n = C.shape[0]
         plain = self.material.response(C, tangent=tangent)
         state = self.classify(C, plain.stress)
@@ -186,9 +191,8 @@ class Wrinkling:
             energy[wrinkled] = self.material.energy(C_modified)
             phi[wrinkled] = phi_w
             b[wrinkled] = b_w
-            if tangent:  # compiled (the same operations) on batches where Numba serves
-                wrinkled_tangent = (compiled.wrinkled_tangent if compiled.enabled(n)
-                                    else self._wrinkled_tangent)
+            if tangent:
+                wrinkled_tangent = kernels.wrinkled_tangent if compiled else self._wrinkled_tangent
                 stiffness[wrinkled] = wrinkled_tangent(
                     c_w, s_w, b_w, modified.stress, modified.tangent
                 )

@@ -1,33 +1,17 @@
-"""Nonlinear solvers: the default regularised Newton and the paper's restricted step."""
+"""Nonlinear solvers (the default regularised Newton and the paper's restricted step), their
+settings, and the load-path followers."""
 
 from wrinkle.solvers.base import ConvergenceError, Evaluation, SolverResult
 from wrinkle.solvers.linear import LINEAR_SOLVERS
 from wrinkle.solvers.newton import RegularisedNewton
 from wrinkle.solvers.restricted_step import RestrictedStep
-
-SOLVERS = {"newton": RegularisedNewton, "restricted-step": RestrictedStep}
-
-
-def make_solver(method: str = "newton", tolerance: float = 1e-6, max_iterations: int | None = None,
-                linear_solver: str = "auto"):
-    """Solver by name: "newton" (default) or "restricted-step"; max_iterations None takes the
-    method's default (100 for Newton, 300 for the slower restricted step); linear_solver one of
-    ``wrinkle.solvers.linear.LINEAR_SOLVERS`` or "auto"."""
-    try:
-        cls = SOLVERS[method]
-    except KeyError:
-        raise ValueError(
-            f"unknown solver method {method!r}; choose one of {sorted(SOLVERS)}"
-        ) from None
-    if max_iterations is None:
-        max_iterations = cls.default_max_iterations
-    if linear_solver != "auto" and linear_solver not in LINEAR_SOLVERS:
-        raise ValueError(
-            f"unknown linear solver {linear_solver!r}; choose auto or one of "
-            f"{sorted(LINEAR_SOLVERS)}"
-        )
-    return cls(tolerance=tolerance, max_iterations=max_iterations, linear_solver=linear_solver)
-
+from wrinkle.solvers.settings import SOLVERS, SolverSettings, make_solver
+from wrinkle.solvers.stepping import (
+    StepController,
+    follow_load_path,
+    solve_step,
+    tangent_prediction,
+)
 
 __all__ = [
     "LINEAR_SOLVERS",
@@ -37,5 +21,10 @@ __all__ = [
     "RegularisedNewton",
     "RestrictedStep",
     "SolverResult",
+    "SolverSettings",
+    "StepController",
+    "follow_load_path",
     "make_solver",
+    "solve_step",
+    "tangent_prediction",
 ]

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
-from typing import Protocol
+from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 import scipy.sparse as sp
@@ -65,22 +65,25 @@ class Problem(Protocol):
 
 @dataclass
 class SolverResult:
-    """A converged solve: displacements (n_dofs,), iteration count and residual history."""
+    """A converged solve: displacements (n_dofs,), iteration count, residual history and
+    the last evaluation."""
 
     u: np.ndarray
     iterations: int
-    residual_norms: list[float] = field(default_factory=list)
-    evaluation: Evaluation | None = None
+    residual_norms: list[float]
+    evaluation: Evaluation  # at u
 
 
 class ConvergenceError(RuntimeError):
-    """The solver did not converge; ``history`` holds the residual norms it reached and
-    ``results`` (set by ``Model.solve``) the load steps that did converge."""
+    """The solver did not converge; ``history`` holds the residual norms it reached,
+    ``reached`` (set by a path follower) the last converged load factor and ``results`` (set
+    by ``Model.solve``) the load steps that did converge."""
 
     def __init__(self, message: str, history: list[float]):
         super().__init__(message)
         self.history = history
-        self.results = None
+        self.reached: float | None = None
+        self.results: Any = None
 
 
 class EvaluationFailure(RuntimeError):

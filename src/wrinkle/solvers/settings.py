@@ -1,0 +1,134 @@
+"""Solver settings: the one place where the nonlinear solver's and the load stepping's
+defaults are stated (a case file's ``[solver]`` table, ``Model.solve``'s keywords)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from wrinkle.solvers.base import RegularisedSolver
+from wrinkle.solvers.linear import LINEAR_SOLVERS
+from wrinkle.solvers.newton import RegularisedNewton
+from wrinkle.solvers.restricted_step import RestrictedStep
+from wrinkle.solvers.stepping import StepController
+
+__all__ = ["SOLVERS", "SolverSettings", "make_solver"]
+
+SOLVERS: dict[str, type[RegularisedSolver]] = {
+    "newton": RegularisedNewton,
+    "restricted-step": RestrictedStep,
+}
+
+
+def make_solver(
+    method: str = "newton",
+    tolerance: float = 1e-6,
+    max_iterations: int | None = None,
+    linear_solver: str = "auto",
+) -> RegularisedSolver:
+    """Solver by name: "newton" (default) or "restricted-step"; max_iterations None takes the
+    method's default (100 for Newton, 300 for the slower restricted step); linear_solver one of
+    ``wrinkle.solvers.linear.LINEAR_SOLVERS`` or "auto"."""
+    try:
+        cls = SOLVERS[method]
+    except KeyError:
+        raise ValueError(
+            f"unknown solver method {method!r}; choose one of {sorted(SOLVERS)}"
+        ) from None
+    if linear_solver != "auto" and linear_solver not in LINEAR_SOLVERS:
+        raise ValueError(
+            f"unknown linear solver {linear_solver!r}; choose auto or one of "
+            f"{sorted(LINEAR_SOLVERS)}"
+        )
+    return cls(tolerance=tolerance, max_iterations=max_iterations, linear_solver=linear_solver)
+
+
+def _check(name: str, value: Any, ok: bool, requirement: str) -> None:
+    if not ok:
+        raise ValueError(f"solver {name} must be {requirement}, got {value!r}")
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """How a model is solved: the nonlinear method and the load stepping.
+
+    method: "newton" (regularised Newton on the energy) or "restricted-step" (the paper's);
+    tolerance: on the residual force relative to the applied and reaction forces;
+    max_iterations: per load step (None: the method's, 100 or 300); linear_solver: "auto",
+    "superlu", "pardiso", "cholmod" or "amg". Load stepping (``StepController``): steps
+    (the first increment of the load factor is 1/steps), min_step, max_step (None: 1/steps),
+    cutback (factor on the increment after a failed step), growth (factor after an easy
+    step), target_iterations (a step converged in at most this many iterations is easy).
+    Raises ValueError naming the first bad field.
+    """
+
+    method: str = "newton"
+    tolerance: float = 1e-6
+    max_iterations: int | None = None
+    linear_solver: str = "auto"
+    steps: int = 1
+    min_step: float = 1e-4
+    max_step: float | None = None
+    cutback: float = 0.5
+    growth: float = 2.0
+    target_iterations: int = 6
+
+    def __post_init__(self) -> None:
+        _check("method", self.method, self.method in SOLVERS, f"one of {sorted(SOLVERS)}")
+        names = ["auto", *LINEAR_SOLVERS]
+        _check("linear_solver", self.linear_solver, self.linear_solver in names,
+               f"one of {names}")
+        _check("tolerance", self.tolerance, _is_number(self.tolerance) and self.tolerance > 0,
+               "a number > 0")
+        if self.max_iterations is not None:
+            _check("max_iterations", self.max_iterations,
+                   isinstance(self.max_iterations, int) and not isinstance(self.max_iterations, bool)
+                   and self.max_iterations >= 1, "an integer >= 1")
+        _check("steps", self.steps,
+               isinstance(self.steps, int) and not isinstance(self.steps, bool) and self.steps >= 1,
+               "an integer >= 1")
+        _check("min_step", self.min_step, _is_number(self.min_step) and self.min_step > 0,
+               "a number > 0")
+        if self.max_step is not None:
+            _check("max_step", self.max_step,
+                   _is_number(self.max_step) and self.min_step <= self.max_step <= 1,
+                   f"a number in [min_step, 1] = [{self.min_step:g}, 1]")
+        _check("cutback", self.cutback, _is_number(self.cutback) and 0 < self.cutback < 1,
+               "a number in (0, 1)")
+        _check("growth", self.growth, _is_number(self.growth) and self.growth >= 1,
+               "a number >= 1")
+        _check("target_iterations", self.target_iterations,
+               isinstance(self.target_iterations, int)
+               and not isinstance(self.target_iterations, bool) and self.target_iterations >= 0,
+               "an integer >= 0")
+
+    def replace(self, **changes: Any) -> SolverSettings:
+        """A copy with some fields changed (values None are ignored); TypeError for a name
+        that is not a field."""
+        names = {f.name for f in dataclasses.fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise TypeError(f"unknown solver setting {unknown[0]!r} (one of {sorted(names)})")
+        given = {key: value for key, value in changes.items() if value is not None}
+        return dataclasses.replace(self, **given) if given else self
+
+    def solver(self) -> RegularisedSolver:
+        """The nonlinear solver these settings name."""
+        return make_solver(self.method, self.tolerance, self.max_iterations, self.linear_solver)
+
+    def controller(self) -> StepController:
+        """The load-step controller of these settings."""
+        return StepController(
+            first_step=1.0 / self.steps,
+            min_step=self.min_step,
+            max_step=1.0 / self.steps if self.max_step is None else self.max_step,
+            cutback=self.cutback,
+            growth=self.growth,
+            target_iterations=self.target_iterations,
+        )

@@ -1,0 +1,476 @@
+"""The discrete system of a model: what the solvers evaluate at a displacement vector.
+
+A ``DiscreteSystem`` is made from a model's definition (``Model.discretise``): the sparsity
+pattern, the reference geometry, the element groups (one per material), the kernel set (NumPy
+or compiled, chosen once for the mesh), the round-off floor of the convergence test, the step
+metric and the positions of the constrained entries. It takes the definition as arrays and
+reads nothing of the model. ``evaluate(u, load_factor)`` gives the residual, the energy, the
+element states and the tangent stiffness; ``at(load_factor)`` the ``StepProblem`` of one load
+level, which is what the nonlinear solvers (``wrinkle.solvers``) take.
+
+Units are consistent units; displacement vectors are (n_dofs,) = (3 n_nodes,), node by node.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from wrinkle import compiled
+from wrinkle.assembly import SparsityPattern
+from wrinkle.element import (
+    KERNEL_BLOCK,
+    ElementResult,
+    MembraneElements,
+    unit_tension_stiffness,
+)
+from wrinkle.kinematics import ReferenceGeometry, element_coordinates
+from wrinkle.loads import (
+    edge_follower_forces,
+    pressure_forces,
+    pressure_volume,
+    subtract_pressure_stiffness,
+)
+from wrinkle.mesh import Mesh
+from wrinkle.solvers.base import Evaluation, EvaluationFailure
+from wrinkle.timing import ASSEMBLY, ELEMENTS, Stopwatch
+from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, Wrinkling, WrinklingError
+
+__all__ = ["DiscreteSystem", "FollowerEdgeLoad", "StepProblem"]
+
+StiffnessSink = Callable[[np.ndarray | slice, np.ndarray], None]
+
+
+@dataclass(frozen=True)
+class FollowerEdgeLoad:
+    """A normal edge load that follows the deformed edge, on m boundary edges.
+
+    edges: (m, 3) node triples (edge node a, edge node b, third node of the triangle);
+    normal: (m,) force per unit current length, in the membrane plane, positive outwards;
+    owner: (m,) the triangle of each edge; local_dofs: (m, 9) places of the triple's dofs
+    among the owner triangle's 9, for its load stiffness.
+    """
+
+    edges: np.ndarray
+    normal: np.ndarray
+    owner: np.ndarray
+    local_dofs: np.ndarray
+
+
+@dataclass
+class Loading:
+    """The loads of a model at load factor 1.
+
+    forces: (n_dofs,) dead nodal forces; pressure: (n_elements,) follower pressure per element
+    (force per unit current area, along the element normal); follower_edges: normal edge loads
+    that follow the deformed edges.
+    """
+
+    forces: np.ndarray
+    pressure: np.ndarray
+    follower_edges: list[FollowerEdgeLoad] = field(default_factory=list)
+
+    @property
+    def has_followers(self) -> bool:
+        return bool(np.any(self.pressure != 0) or self.follower_edges)
+
+
+def _concatenate_results(results: list[ElementResult], inverse: np.ndarray) -> ElementResult:
+    """Element results of several material groups in mesh order."""
+
+    def join(values):
+        if values[0] is None:
+            return None
+        return np.concatenate(values)[inverse]
+
+    responses = [r.response for r in results]
+    response = type(responses[0])(
+        **{f.name: join([getattr(r, f.name) for r in responses]) for f in fields(responses[0])}
+    )
+    return ElementResult(
+        join([r.deformation_gradient for r in results]),
+        response,
+        join([r.forces for r in results]),
+        join([r.stiffness for r in results]),
+        join([r.energy for r in results]),
+    )
+
+
+class DiscreteSystem:
+    """The discretised membrane: element groups, loads and supports on a fixed pattern.
+
+    mesh: the ``Mesh``; pattern: its ``SparsityPattern``; geometry: the ``ReferenceGeometry``
+    of all elements (material frames included); materials: one ``Wrinkling`` per group and
+    material_of_element (n_elements,) the group of each element; constrained (n_dofs,) bool
+    and prescribed (n_dofs,) the supported components and their values at load factor 1;
+    loading: the ``Loading`` at load factor 1.
+    """
+
+    def __init__(
+        self,
+        mesh: Mesh,
+        pattern: SparsityPattern,
+        geometry: ReferenceGeometry,
+        materials: Sequence[Wrinkling],
+        material_of_element: np.ndarray,
+        constrained: np.ndarray,
+        prescribed: np.ndarray,
+        loading: Loading,
+    ):
+        self.mesh = mesh
+        self.pattern = pattern
+        self.geometry = geometry
+        self.n_dofs = pattern.n_dofs
+        self.constrained = constrained
+        self.prescribed = prescribed
+        self.loading = loading
+        # the kernel set, chosen once for the mesh (wrinkle.compiled.enabled)
+        self.compiled = compiled.enabled(mesh.n_elements)
+        self.groups: list[tuple[np.ndarray, MembraneElements]] = []
+        for index, material in enumerate(materials):
+            elements = np.flatnonzero(material_of_element == index)
+            if elements.size:
+                self.groups.append(
+                    (elements, MembraneElements(geometry.subset(elements), material,
+                                                compiled=self.compiled))
+                )
+        order = np.concatenate([elements for elements, _ in self.groups])
+        self._inverse_order = np.argsort(order) if len(self.groups) > 1 else None
+        self.force_round_off = self._force_round_off()
+        self._constraint_data: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    @property
+    def elements(self) -> MembraneElements:
+        """The elements of a single-material system."""
+        if len(self.groups) != 1:
+            raise ValueError("the model has several materials: use system.groups")
+        return self.groups[0][1]
+
+    @property
+    def has_follower_loads(self) -> bool:
+        return self.loading.has_followers
+
+    def _force_round_off(self) -> float:
+        """Residual norm that round-off alone can produce, force: 10 eps |dN/dE at C = I|
+        (sum over elements of (A0 |grad psi| (1 + |X| max|grad psi|))^2)^(1/2). An element's
+        strains carry a round-off of eps (1 + |X| max|grad psi|): its node coordinates are
+        rounded to eps |X|, which over an edge of length 1 / max|grad psi| is a strain, so the
+        floor rises with the mesh's fineness and its distance from the origin. (The factor 10
+        leaves a margin of 20 to 40 over the smallest residual Newton reaches on the
+        shear-stretch square, 7e-15 to 3e-13 N from 10^3 to 10^6 elements.)"""
+        total = 0.0
+        nodes = self.mesh.nodes
+        for indices, elements in self.groups:
+            g = elements.geometry
+            material = elements.material.material
+            stiffness = np.linalg.norm(material.response(np.eye(2)[None]).tangent)
+            extent = np.abs(nodes[self.mesh.triangles[indices]]).max(axis=(1, 2))
+            coordinate_noise = extent * np.abs(g.shape_gradient).max(axis=(1, 2))
+            per_element = g.area * np.linalg.norm(g.shape_gradient.reshape(-1, 6), axis=1)
+            total += (stiffness * np.linalg.norm(per_element * (1.0 + coordinate_noise))) ** 2
+        return float(10 * np.finfo(float).eps * np.sqrt(total))
+
+    def step_metric(self) -> np.ndarray:
+        """CSR data, on ``pattern``, of the unit-tension stiffness (``unit_tension_stiffness``
+        assembled: a Laplacian on each displacement component), (nnz,)."""
+        g = self.geometry
+        data = np.zeros(self.pattern.nnz)
+        for start in range(0, g.n_elements, KERNEL_BLOCK):
+            block = slice(start, min(start + KERNEL_BLOCK, g.n_elements))
+            self.pattern.add_to_data(
+                data, block, unit_tension_stiffness(g.area[block], g.shape_gradient[block]),
+                compiled=self.compiled,
+            )
+        return data
+
+    def constraint_data(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """What every load step's problem needs of the supports: positions in ``pattern``'s
+        data of the constrained rows and columns and of the constrained diagonal entries, and
+        the step metric (``step_metric``) with those rows and columns zeroed, (nnz,). Made
+        once, at the first use."""
+        if self._constraint_data is None:
+            positions = self.pattern.constraint_positions(self.constrained)
+            metric = self.step_metric()
+            metric[positions] = 0.0
+            self._constraint_data = (positions, self.pattern.diagonal[self.constrained], metric)
+        return self._constraint_data
+
+    # -- evaluation ---------------------------------------------------------------------
+    def element_coordinates(self, u: np.ndarray) -> np.ndarray:
+        """Current node coordinates of every triangle at displacements u, (n_elements, 3, 3)."""
+        return element_coordinates(self.mesh.nodes + u.reshape(-1, 3), self.mesh.triangles)
+
+    def evaluate_elements(
+        self,
+        u: np.ndarray,
+        stiffness: bool = True,
+        stiffness_sink: StiffnessSink | None = None,
+        x_elements: np.ndarray | None = None,
+    ) -> ElementResult:
+        """Element forces, stiffness and states at displacements u, (n_dofs,).
+
+        stiffness_sink(elements, K): if given, receives the stiffness block by block (mesh
+        element indices or a slice, (m, 9, 9)) instead of the result holding all of it.
+        x_elements: ``element_coordinates(u)`` if the caller has them. Raises
+        EvaluationFailure naming the elements whose wrinkling conditions could not be solved.
+        """
+        x = self.element_coordinates(u) if x_elements is None else x_elements
+        groups = self.groups
+        results = []
+        for index, elements in groups:
+            sink = stiffness_sink
+            if stiffness_sink is not None and len(groups) > 1:
+
+                def sink(rows, K, index=index, outer=stiffness_sink):
+                    outer(index[rows], K)
+
+            try:
+                results.append(
+                    elements.evaluate(
+                        x if len(groups) == 1 else x[index],
+                        stiffness=stiffness,
+                        stiffness_sink=sink,
+                    )
+                )
+            except WrinklingError as error:  # group rows -> mesh elements
+                raise EvaluationFailure(str(WrinklingError(index[error.elements]))) from error
+        if self._inverse_order is None:
+            return results[0]
+        return _concatenate_results(results, self._inverse_order)
+
+    def _pressurised(self) -> slice | np.ndarray | None:
+        """The elements under pressure: their indices, a slice if they are all of them, None if
+        there are none."""
+        loaded = np.flatnonzero(self.loading.pressure)
+        if loaded.size == 0:
+            return None
+        return slice(0, loaded.size) if loaded.size == self.mesh.n_elements else loaded
+
+    def _loaded_coordinates(
+        self, u: np.ndarray, loaded: slice | np.ndarray, x_elements: np.ndarray | None
+    ) -> np.ndarray:
+        """Current coordinates (m, 3, 3) of the pressurised elements ``loaded`` (from
+        ``_pressurised``): taken from x_elements (``element_coordinates(u)``) if given, else
+        gathered at the displacements u."""
+        if x_elements is not None:
+            return x_elements[loaded]
+        return (self.mesh.nodes + u.reshape(-1, 3))[self.mesh.triangles[loaded]]
+
+    def follower_forces(
+        self,
+        u: np.ndarray,
+        load_factor: float,
+        stiffness: bool = True,
+        stiffness_sink: StiffnessSink | None = None,
+        pressure_stiffness: bool = True,
+        x_elements: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """Assembled follower loads at u: forces (n_dofs,) and their load stiffness d f / d u,
+        element-wise (n, 9, 9) on the triangles (None if not asked or no follower load), or
+        handed block by block to ``stiffness_sink(elements, K)`` (then None is returned).
+        pressure_stiffness=False leaves the pressure's out (``subtract_pressure_stiffness``
+        takes it into the element blocks instead). x_elements: ``element_coordinates(u)`` if
+        the caller has them."""
+        x_nodes = self.mesh.nodes + u.reshape(-1, 3)
+        forces = np.zeros(self.n_dofs)
+        blocks: list[tuple[np.ndarray | slice, np.ndarray]] = []  # when no sink is given
+
+        def keep(elements: np.ndarray | slice, k: np.ndarray) -> None:
+            blocks.append((elements, k.copy()))
+
+        sink = stiffness_sink or keep
+        loaded = self._pressurised()
+        if loaded is not None:
+            x = self._loaded_coordinates(u, loaded, x_elements)
+            pressure = load_factor * self.loading.pressure[loaded]
+            if self.compiled:
+                compiled.add_pressure_forces(
+                    forces, self.pattern.element_dofs[loaded], x, pressure
+                )
+            else:
+                f, _ = pressure_forces(x, pressure, stiffness=False)
+                forces += np.bincount(
+                    self.pattern.element_dofs[loaded].ravel(), f.ravel(), minlength=self.n_dofs
+                )
+            if stiffness and pressure_stiffness:
+                for start in range(0, x.shape[0], KERNEL_BLOCK):
+                    block = slice(start, min(start + KERNEL_BLOCK, x.shape[0]))
+                    elements = block if isinstance(loaded, slice) else loaded[block]
+                    sink(elements, pressure_forces(x[block], pressure[block])[1])
+        for edge_load in self.loading.follower_edges:
+            triples = edge_load.edges
+            f, k = edge_follower_forces(x_nodes[triples], load_factor * edge_load.normal,
+                                        stiffness)
+            dofs = (3 * triples[:, :, None] + np.arange(3)).reshape(-1, 9)
+            forces += np.bincount(dofs.ravel(), f.ravel(), minlength=self.n_dofs)
+            if stiffness:
+                in_triangle = np.zeros((k.shape[0], 9, 9))
+                rows = np.arange(k.shape[0])[:, None, None]
+                local = edge_load.local_dofs
+                in_triangle[rows, local[:, :, None], local[:, None, :]] = k
+                sink(edge_load.owner, in_triangle)
+        if not blocks:
+            return forces, None
+        K = np.zeros((self.mesh.n_elements, 9, 9))
+        for elements, k in blocks:
+            np.add.at(K, elements, k)
+        return forces, K
+
+    def subtract_pressure_stiffness(
+        self, K: np.ndarray, x: np.ndarray, elements: np.ndarray | slice, load_factor: float
+    ) -> None:
+        """Subtract the pressure's load stiffness from the element matrices K (m, 9, 9) of
+        ``elements`` (a slice or indices) in place; x (m, 3, 3) their current coordinates."""
+        pressure = self.loading.pressure[elements]
+        if np.any(pressure):
+            if self.compiled:
+                compiled.subtract_pressure_stiffness(K, x, load_factor * pressure)
+            else:
+                subtract_pressure_stiffness(K, x, load_factor * pressure)
+
+    def pressure_work(self, u: np.ndarray, x_elements: np.ndarray | None = None) -> float:
+        """Sum of p V_cone over the pressurised elements at full load (``pressure_volume``):
+        the pressure's potential is minus this; exact when the boundary is held or moves in
+        planes through the origin (symmetry planes), otherwise a merit for the solver only.
+        x_elements: ``element_coordinates(u)`` if the caller has them."""
+        loaded = self._pressurised()
+        if loaded is None:
+            return 0.0
+        x = self._loaded_coordinates(u, loaded, x_elements)
+        return float(self.loading.pressure[loaded] @ pressure_volume(x))
+
+    def internal_forces(self, u: np.ndarray) -> np.ndarray:
+        """Global internal force vector f*, (n_dofs,)."""
+        return self.pattern.assemble_vector(self.evaluate_elements(u, stiffness=False).forces)
+
+    def reactions(self, u: np.ndarray, load_factor: float) -> np.ndarray:
+        """Support reactions f* - f_ext at the constrained dofs (zero elsewhere), (n_dofs,)."""
+        external = load_factor * self.loading.forces
+        if self.has_follower_loads:
+            external = external + self.follower_forces(u, load_factor, stiffness=False)[0]
+        return np.where(self.constrained, self.internal_forces(u) - external, 0.0)
+
+    def at(self, load_factor: float = 1.0, prescribed: np.ndarray | None = None) -> StepProblem:
+        """The nonlinear problem at one load level (``StepProblem``); prescribed: (n_dofs,)
+        values of the constrained components (default load_factor times those at full
+        load)."""
+        if prescribed is None:
+            prescribed = load_factor * self.prescribed
+        return StepProblem(self, load_factor, np.asarray(prescribed, dtype=float))
+
+    def evaluate(
+        self,
+        u: np.ndarray,
+        load_factor: float = 1.0,
+        prescribed: np.ndarray | None = None,
+        stiffness: bool = True,
+        lift: np.ndarray | None = None,
+    ) -> Evaluation:
+        """``at(load_factor, prescribed).evaluate(u, stiffness, lift)``."""
+        return self.at(load_factor, prescribed).evaluate(u, stiffness=stiffness, lift=lift)
+
+
+class StepProblem:
+    """Residual, stiffness and potential energy at one load level (the solvers' ``Problem``).
+
+    load_factor scales the dead forces and the follower loads; prescribed: (n_dofs,) values of
+    the constrained displacement components.
+    """
+
+    def __init__(self, system: DiscreteSystem, load_factor: float, prescribed: np.ndarray):
+        self.system = system
+        self.load_factor = load_factor
+        self.forces = load_factor * system.loading.forces
+        self.prescribed = prescribed
+        self.free = ~system.constrained
+        self.symmetric = not system.has_follower_loads
+        # the solver's step metric has the constrained rows and columns zeroed
+        self._constraint_positions, self._constrained_diagonal, self.metric = (
+            system.constraint_data()
+        )
+        self.timer = Stopwatch()  # a path follower shares one across the steps
+
+    def evaluate(
+        self, u: np.ndarray, stiffness: bool = True, lift: np.ndarray | None = None
+    ) -> Evaluation:
+        """Residual, energy, element states and (``stiffness``) the tangent at u, (n_dofs,).
+
+        lift: (n_dofs,) an increment of the constrained components (zero elsewhere); the
+        residual is then the out-of-balance force linearised at u + lift,
+        f - f*(u) - K lift on the free rows, from the tangent K at u before its constrained
+        rows and columns are replaced (needs ``stiffness``).
+        """
+        system, timer = self.system, self.timer
+        pattern = system.pattern
+        data = np.zeros(pattern.nnz) if stiffness else None
+
+        with timer.part(ELEMENTS):
+            x = system.element_coordinates(u)  # shared by the elements and the pressure
+
+        def add_element_stiffness(elements: np.ndarray | slice, K: np.ndarray) -> None:
+            # assembled block by block as evaluated
+            system.subtract_pressure_stiffness(K, x[elements], elements, self.load_factor)
+            with timer.part(ASSEMBLY):
+                pattern.add_to_data(data, elements, K, compiled=system.compiled)
+
+        def subtract_load_stiffness(elements: np.ndarray | slice, K: np.ndarray) -> None:
+            with timer.part(ASSEMBLY):
+                pattern.add_to_data(data, elements, -K, compiled=system.compiled)
+
+        with timer.part(ELEMENTS):
+            result = system.evaluate_elements(
+                u,
+                stiffness=stiffness,
+                stiffness_sink=add_element_stiffness if stiffness else None,
+                x_elements=x,
+            )
+        with timer.part(ASSEMBLY):
+            internal = pattern.assemble_vector(result.forces)
+        external = self.forces
+        energy = float(np.sum(result.energy) - self.forces @ u)
+        if system.has_follower_loads:
+            with timer.part(ELEMENTS):
+                follower, _ = system.follower_forces(
+                    u,
+                    self.load_factor,
+                    stiffness,
+                    subtract_load_stiffness if stiffness else None,
+                    pressure_stiffness=False,
+                    x_elements=x,
+                )
+            external = external + follower
+            energy -= self.load_factor * system.pressure_work(u, x_elements=x)
+            if system.loading.follower_edges:
+                energy = np.nan  # follower edge loads have no potential
+        residual = np.where(self.free, external - internal, 0.0)
+        reactions = np.where(self.free, 0.0, internal - external)
+        scale = max(np.linalg.norm(external), np.linalg.norm(reactions))
+        state = result.response.state
+        counts = (
+            int(np.count_nonzero(state == TAUT)),
+            int(np.count_nonzero(state == WRINKLED)),
+            int(np.count_nonzero(state == SLACK)),
+        )
+        K = None
+        if data is not None:
+            with timer.part(ASSEMBLY):
+                if lift is not None:
+                    coupling = pattern.matrix(data) @ lift
+                    residual = np.where(self.free, residual - coupling, 0.0)
+                data[self._constraint_positions] = 0.0
+                data[self._constrained_diagonal] = 1.0
+                K = pattern.matrix(data)
+        return Evaluation(
+            residual,
+            energy,
+            float(scale),
+            counts,
+            K,
+            system.force_round_off,
+            self.symmetric,
+            pattern.diagonal,
+            self.metric,
+            reactions,
+        )
