@@ -16,6 +16,8 @@ import scipy.sparse as sp
 
 from wrinkle import compiled as kernels
 
+__all__ = ["DOFS_PER_NODE", "SparsityPattern"]
+
 DOFS_PER_NODE = 3
 
 

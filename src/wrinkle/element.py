@@ -1,15 +1,14 @@
 """Nodal forces and stiffness of all membrane triangles at once.
 
-Internal nodal force of node k (Roddeman et al. 1987, Part II, eq. 39, METHOD.md section 3):
-f_k = A0 F N grad(psi_k), with N the (wrinkling) stress resultant. In Voigt form, with the
-strain-displacement matrix B (dE_voigt = B du, (n, 3, 9)):
+Internal nodal force of node k (Roddeman et al. 1987, Part II, eq. 39; docs/method.md
+section 3): f_k = A0 F N grad(psi_k), with N the (wrinkling) stress resultant. In Voigt form,
+with the strain-displacement matrix B (dE_voigt = B du, (n, 3, 9)):
 
     f = A0 B^T s,        K = A0 (B^T D B + (grad psi_k . N grad psi_l) I_3),
 
-and the forces are computed as f_k = A0 F N grad psi_k, the same without forming B.
-
-the second term being the geometric (initial-stress) stiffness. Degrees of freedom of an element
-are ordered node by node: (u1x, u1y, u1z, u2x, ..., u3z).
+the second term of K being the geometric (initial-stress) stiffness. The forces are computed
+as f_k = A0 F N grad psi_k, the same as A0 B^T s without forming B. Degrees of freedom of an
+element are ordered node by node: (u1x, u1y, u1z, u2x, ..., u3z).
 """
 
 from __future__ import annotations
@@ -21,6 +20,8 @@ import numpy as np
 from wrinkle import compiled as kernels
 from wrinkle.kinematics import ReferenceGeometry, deformation_gradient, right_cauchy_green
 from wrinkle.wrinkling import Wrinkling, WrinklingError, WrinklingResponse
+
+__all__ = ["KERNEL_BLOCK", "ElementResult", "MembraneElements", "add_geometric_stiffness", "element_stiffness", "strain_displacement", "unit_tension_stiffness"]
 
 
 @dataclass
@@ -63,16 +64,11 @@ def strain_displacement(F: np.ndarray, shape_gradient: np.ndarray) -> np.ndarray
     return B.reshape(n, 3, 9)
 
 
-def element_forces(area: np.ndarray, B: np.ndarray, stress: np.ndarray) -> np.ndarray:
-    """Internal nodal forces A0 B^T s, (n, 9); B (n, 3, 9), stress (n, 2, 2) resultant."""
-    s0, s1, s2 = stress[:, 0, 0], stress[:, 1, 1], stress[:, 0, 1]
-    return area[:, None] * (B[:, 0] * s0[:, None] + B[:, 1] * s1[:, None] + B[:, 2] * s2[:, None])
-
-
 def _nodal_forces(
     area: np.ndarray, F: np.ndarray, shape_gradient: np.ndarray, stress: np.ndarray, out: np.ndarray
 ) -> np.ndarray:
-    """``element_forces`` without forming B: f_k = A0 F N grad psi_k written into out (n, 9).
+    """Internal nodal forces A0 B^T s without forming B: f_k = A0 F N grad psi_k written into
+    out (n, 9).
 
     area (n,), F (n, 3, 2), shape_gradient (n, 3, 2), stress (n, 2, 2) resultant N.
     """

@@ -13,6 +13,8 @@ import numpy as np
 
 from wrinkle.kinematics import cross
 
+__all__ = ["boundary_edges", "edge_dead_forces", "edge_follower_forces", "pressure_forces", "pressure_volume", "skew", "subtract_pressure_stiffness"]
+
 
 def skew(a: np.ndarray) -> np.ndarray:
     """Cross-product matrices [a]x with [a]x b = a x b, (n, 3) -> (n, 3, 3)."""

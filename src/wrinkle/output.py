@@ -48,6 +48,8 @@ import numpy as np
 from wrinkle.post import element_report, support_reactions
 from wrinkle.wrinkling import STATE_NAMES
 
+__all__ = ["COLLECTION", "HISTORY", "STEP_FILE", "SUMMARY", "ResultWriter", "atomic_write", "require_meshio", "save_results", "step_file_name"]
+
 SUMMARY = "summary.json"
 HISTORY = "history.csv"
 COLLECTION = "results.pvd"

@@ -35,6 +35,8 @@ import numpy as np
 
 from wrinkle.mesh import Mesh, mesh_size
 
+__all__ = ["CONSTANTS", "FUNCTIONS", "KEYWORDS", "RELATIVE_TOLERANCE", "VARIABLES", "evaluate_expression", "select_nodes"]
+
 VARIABLES = ("x", "y", "z", "r", "theta")
 CONSTANTS = {"pi": math.pi}
 FUNCTIONS = {  # name: (number of arguments, NumPy function)

@@ -38,7 +38,7 @@ from wrinkle.solvers.base import Evaluation, EvaluationFailure
 from wrinkle.timing import ASSEMBLY, ELEMENTS, Stopwatch
 from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, Wrinkling, WrinklingError
 
-__all__ = ["DiscreteSystem", "FollowerEdgeLoad", "StepProblem"]
+__all__ = ["DiscreteSystem", "FollowerEdgeLoad", "Loading", "StepProblem"]
 
 StiffnessSink = Callable[[np.ndarray | slice, np.ndarray], None]
 

@@ -6,6 +6,8 @@ import time
 from collections import defaultdict
 from contextlib import contextmanager
 
+__all__ = ["ASSEMBLY", "ELEMENTS", "LINEAR", "Stopwatch"]
+
 ELEMENTS = "element evaluation"
 ASSEMBLY = "assembly"
 LINEAR = "linear solves"

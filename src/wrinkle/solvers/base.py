@@ -12,6 +12,8 @@ import scipy.sparse as sp
 from wrinkle.solvers.linear import SymmetryCheck, diagonal_positions, make_linear_solver
 from wrinkle.timing import LINEAR, Stopwatch
 
+__all__ = ["ConvergenceError", "Evaluation", "EvaluationFailure", "Problem", "RegularisedSolver", "SolverResult", "is_converged", "log_iteration", "shifted", "stiffness_scale", "try_evaluate"]
+
 logger = logging.getLogger("wrinkle.solver")
 
 

@@ -39,6 +39,8 @@ from wrinkle.solvers.base import (
 )
 from wrinkle.solvers.linear import diagonal_positions
 
+__all__ = ["RegularisedNewton"]
+
 _THETA_FLOOR = 1e-14
 _ROUND_OFF = 1e-12
 _IDENTITY_SHARE = 1e-3  # share of the identity in the metric M when the problem gives one

@@ -17,6 +17,8 @@ import numpy as np
 
 from wrinkle.solvers.base import Evaluation, RegularisedSolver, shifted, stiffness_scale
 
+__all__ = ["RestrictedStep"]
+
 _CRITICAL = 1e-8  # relative mu below which theta drops to the floor (Fletcher's nu_c)
 _FLOOR = 1e-12  # relative mu at the floor
 

@@ -1,0 +1,83 @@
+"""The model definition (wrinkle.model): nodes and elements named as a case file names them,
+the discrete system kept while nothing changes and made anew after a change."""
+
+import numpy as np
+import pytest
+
+import wrinkle
+from wrinkle.materials import StVenantKirchhoff
+
+MATERIAL = StVenantKirchhoff.isotropic(E=1e3, nu=0.3, thickness=0.01)
+
+
+def sheet():
+    mesh = wrinkle.rectangle(1.0, 1.0, 4, 4)
+    return mesh, wrinkle.Model(mesh, MATERIAL)
+
+
+@pytest.mark.parametrize("how", ["indices", "mask", "node set", "selector"])
+def test_nodes_by_indices_mask_set_or_selector(how):
+    mesh, model = sheet()
+    bottom = mesh.node_sets["bottom"]
+    given = {
+        "indices": bottom,
+        "mask": np.isin(np.arange(mesh.n_nodes), bottom),
+        "node set": "bottom",
+        "selector": "y == 0",
+    }[how]
+    model.fix(given, "xz", label="b")
+    expected = np.zeros((mesh.n_nodes, 3), dtype=bool)
+    expected[bottom, 0] = expected[bottom, 2] = True
+    np.testing.assert_array_equal(model.constrained.reshape(-1, 3), expected)
+    np.testing.assert_array_equal(model.supports[0].nodes, np.sort(bottom))
+
+
+def test_selector_errors_name_the_selector():
+    _, model = sheet()
+    with pytest.raises(ValueError, match='selector "y == 5" matches no node'):
+        model.fix("y == 5")
+    with pytest.raises(ValueError, match="node 99 does not exist"):
+        model.prescribe([0, 99], (0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="mask must have 25 entries"):
+        model.fix(np.ones(3, dtype=bool))
+
+
+def test_elements_by_set_name():
+    mesh = wrinkle.cylinder(0.1, 0.5, 12, 4, 2)
+    model = wrinkle.Model(mesh, MATERIAL)
+    model.add_pressure(100.0, "wall")
+    expected = np.zeros(mesh.n_elements)
+    expected[mesh.element_sets["wall"]] = 100.0
+    np.testing.assert_array_equal(model.pressure, expected)
+    with pytest.raises(ValueError, match="'roof' is not an element set of the mesh"):
+        model.add_pressure(1.0, "roof")
+
+
+def test_discrete_system_is_kept_until_the_model_changes():
+    mesh, model = sheet()
+    model.fix("bottom")
+    system = model.discretise()
+    assert model.discretise() is system
+    pattern, geometry = system.pattern, system.geometry
+    model.prescribe("top", (0.0, 0.01, 0.0))  # supports changed: a new system ...
+    changed = model.discretise()
+    assert changed is not system
+    assert changed.pattern is pattern and changed.geometry is geometry  # ... on the same mesh
+    np.testing.assert_array_equal(changed.constrained, model.constrained)
+    model.add_nodal_force("x == 1 and y == 1", (0.0, 0.0, 1e-3))
+    loaded = model.discretise()
+    assert loaded is not changed
+    np.testing.assert_array_equal(loaded.loading.forces, model.forces)
+    model.assign_material(MATERIAL, fibre_angle=0.3)  # materials changed: a new geometry
+    assert model.discretise().geometry is not geometry
+
+
+def test_solve_with_selectors_equals_solve_with_indices():
+    mesh, by_name = sheet()
+    by_name.fix("bottom")
+    by_name.prescribe("y == 1", (0.02, 0.05, 0.0))
+    _, by_index = sheet()
+    by_index.fix(mesh.node_sets["bottom"])
+    by_index.prescribe(mesh.node_sets["top"], (0.02, 0.05, 0.0))
+    np.testing.assert_array_equal(by_name.solve().final.displacement,
+                                  by_index.solve().final.displacement)

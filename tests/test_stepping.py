@@ -1,0 +1,120 @@
+"""The load path (wrinkle.solvers.stepping): the step controller's rules, checked against
+increment sequences worked out by hand, and the path follower on a real model."""
+
+import numpy as np
+import pytest
+
+import wrinkle
+from wrinkle.materials import StVenantKirchhoff
+from wrinkle.solvers import ConvergenceError, SolverSettings, StepController, follow_load_path
+from wrinkle.solvers.base import Evaluation, SolverResult
+
+
+class FakeProblem:
+    """A load level whose evaluations are never in balance (so the solver is always called)."""
+
+    def __init__(self, load_factor, n_dofs):
+        self.load_factor = load_factor
+        self.prescribed = np.zeros(n_dofs)
+        self.free = np.ones(n_dofs, dtype=bool)
+        self.timer = None
+
+    def evaluate(self, u, stiffness=True, lift=None):
+        return Evaluation(np.ones(u.size), 0.0, 1.0, (1, 0, 0))
+
+
+class FakeLevels:
+    n_dofs = 3
+
+    def at(self, load_factor=1.0, prescribed=None):
+        return FakeProblem(load_factor, self.n_dofs)
+
+
+class FakeSolver:
+    """Fails a step whose increment exceeds ``largest``; otherwise converges in
+    ``iterations`` iterations. Records the load factors it is asked to solve."""
+
+    tolerance = 1e-6
+    tangent_predictor = False
+
+    def __init__(self, largest, iterations):
+        self.largest, self.iterations = largest, iterations
+        self.trials, self.reached = [], 0.0
+
+    def solve(self, problem, start, at_start=None):
+        factor = problem.load_factor
+        self.trials.append(round(factor, 12))
+        if factor - self.reached > self.largest + 1e-12:
+            raise ConvergenceError("too far", [])
+        self.reached = factor
+        return SolverResult(start, self.iterations, [], at_start)
+
+
+def test_controller_rules():
+    controller = StepController(first_step=0.5, min_step=0.1, max_step=0.4, cutback=0.25,
+                                growth=3.0, target_iterations=4)
+    assert controller.first() == 0.4  # never above max_step
+    assert controller.after_failure(0.4) == pytest.approx(0.1)
+    assert controller.after_failure(0.3) is None  # 0.075 < min_step
+    assert controller.after_success(0.1, 4) == pytest.approx(0.3)  # easy: grown by 3
+    assert controller.after_success(0.1, 5) == 0.1  # not easy: kept
+    assert controller.after_success(0.3, 1) == pytest.approx(0.4)  # up to max_step
+
+
+def test_cut_back_and_growth_sequence():
+    """Worked by hand: increments of 0.25 aimed at, steps larger than 0.2 fail, 3 iterations
+    (easy) each: 0.25 fails, 0.125 converges, grows back to 0.25 which fails from 0.125,
+    0.125 again, and so on: the path reaches 1 in eight steps of 0.125."""
+    solver = FakeSolver(largest=0.2, iterations=3)
+    controller = SolverSettings(steps=4, cutback=0.5, growth=2.0, target_iterations=6)
+    converged = []
+    follow_load_path(FakeLevels(), solver, controller.controller(),
+                     on_step=lambda f, u, s: converged.append(round(f, 12)))
+    assert converged == [0.125 * k for k in range(1, 9)]
+    assert solver.trials[:4] == [0.25, 0.125, 0.375, 0.25]
+
+
+def test_hard_steps_do_not_grow():
+    """A step taking more than target_iterations keeps its increment: after the first cut
+    (0.5 -> 0.25 under a limit of 0.3) every later step stays at 0.25."""
+    solver = FakeSolver(largest=0.3, iterations=9)
+    follow_load_path(FakeLevels(), solver, SolverSettings(steps=2).controller())
+    assert solver.trials == [0.5, 0.25, 0.5, 0.75, 1.0]
+
+
+def test_failure_below_min_step_reports_where_it_stopped():
+    solver = FakeSolver(largest=0.05, iterations=1)
+    settings = SolverSettings(steps=1, min_step=0.1)
+    with pytest.raises(ConvergenceError, match="minimum 0.1") as caught:
+        follow_load_path(FakeLevels(), solver, settings.controller())
+    assert caught.value.reached == 0.0
+    assert solver.trials == [1.0, 0.5, 0.25, 0.125]  # 0.0625 would be below min_step
+
+
+@pytest.mark.parametrize("field, value", [
+    ("steps", 0), ("cutback", 1.0), ("cutback", 0.0), ("growth", 0.5), ("min_step", -1.0),
+    ("max_step", 2.0), ("target_iterations", -1), ("tolerance", 0.0), ("method", "lbfgs"),
+    ("linear_solver", "mumps"), ("max_iterations", 0),
+])
+def test_bad_settings_name_the_field(field, value):
+    with pytest.raises(ValueError, match=f"solver {field} must be"):
+        SolverSettings(**{field: value})
+
+
+def test_unknown_setting_is_a_type_error():
+    with pytest.raises(TypeError, match="unknown solver setting 'step'"):
+        SolverSettings().replace(step=3)
+
+
+def test_model_solve_takes_the_controller_settings():
+    """A sheet pulled in a path of 2 aimed steps; with max_step = 1/8 and no growth it takes
+    8 equal steps, with the same final state as the 2-step path."""
+    mesh = wrinkle.rectangle(1.0, 1.0, 4, 4)
+    model = wrinkle.Model(mesh, StVenantKirchhoff.isotropic(E=1e3, nu=0.3, thickness=0.01))
+    model.fix("bottom")
+    model.prescribe("top", (0.02, 0.05, 0.0))
+    two = model.solve(steps=2, tolerance=1e-10)
+    eight = model.solve(steps=2, max_step=0.125, tolerance=1e-10)
+    assert [s.load_factor for s in two.steps] == [0.5, 1.0]
+    np.testing.assert_allclose([s.load_factor for s in eight.steps], np.arange(1, 9) / 8)
+    np.testing.assert_allclose(eight.final.displacement, two.final.displacement, atol=1e-9)
