@@ -12,6 +12,7 @@ their diagonal set to one.
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 import scipy.sparse as sp
 
 from wrinkle import compiled as kernels
@@ -69,7 +70,7 @@ class SparsityPattern:
         indptr = np.concatenate([[0], np.cumsum(row_length)])
         self.nnz = int(indptr[-1])
         index_dtype = np.int32 if self.nnz < 2**31 - 1 else np.int64
-        self.indptr = indptr.astype(index_dtype)
+        self.indptr: npt.NDArray[np.signedinteger] = indptr.astype(index_dtype)
         i = np.arange(DOFS_PER_NODE)
         j = np.arange(DOFS_PER_NODE)
         # row 3a+i lists the columns 3b+j of node a's blocks (a, b) in block order: entry q of
@@ -77,7 +78,7 @@ class SparsityPattern:
         # 3 block_ptr[a]
         columns = (DOFS_PER_NODE * block_col[:, None] + j).ravel()
         segment_shift = indptr[:-1] - DOFS_PER_NODE * np.repeat(block_ptr[:-1], DOFS_PER_NODE)
-        self.indices = columns[np.arange(self.nnz) - np.repeat(segment_shift, row_length)].astype(
+        self.indices: npt.NDArray[np.signedinteger] = columns[np.arange(self.nnz) - np.repeat(segment_shift, row_length)].astype(
             index_dtype
         )
         # (element, k, i, l, j): entry (3 a_k + i, 3 a_l + j) of block (a_k, a_l), that is
@@ -140,7 +141,7 @@ class SparsityPattern:
 
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:
         """CSR matrix with this pattern and the given data (not copied)."""
-        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n_dofs,) * 2)
+        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n_dofs, self.n_dofs))
 
     def constraint_positions(self, constrained: np.ndarray) -> np.ndarray:
         """Data positions of all entries in a constrained row or column; constrained (n_dofs,) bool."""

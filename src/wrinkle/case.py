@@ -20,6 +20,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
+from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
 from wrinkle.output import ResultWriter
@@ -314,6 +315,7 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
     values = {key: reader.number(table, key, where) for key in (*parameters, "thickness")}
     if "lmbda" in table:
         values["lmbda"] = reader.number(table, "lmbda", where)
+    material: Material
     try:
         if name == "svk":
             material = StVenantKirchhoff.isotropic(**values)

@@ -34,6 +34,7 @@ that; WRINKLE_NUMBA=1 in the environment uses them on every mesh, WRINKLE_NUMBA=
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 import importlib.util
 import os
 
@@ -188,7 +189,7 @@ def _scatter_add(data, positions, values):
             data[positions[e, q]] += values[e, q]
 
 
-_kernels = {}
+_kernels: dict[str, Callable[..., None]] = {}
 
 
 def _compiled(name: str):

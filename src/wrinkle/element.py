@@ -14,6 +14,7 @@ element are ordered node by node: (u1x, u1y, u1z, u2x, ..., u3z).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from dataclasses import fields as dataclass_fields
 
 import numpy as np
 
@@ -165,15 +166,16 @@ class MembraneElements:
         F = np.empty((n, 3, 2))
         forces = np.empty((n, 9))
         K = np.empty((n, 9, 9)) if stiffness and stiffness_sink is None else None
-        fields = {
-            "state": np.empty(n, dtype=np.int8),
-            "stress": np.empty((n, 2, 2)),
-            "tangent": np.empty((n, 3, 3)) if stiffness else None,
-            "thickness": np.empty(n),
-            "wrinkle_angle": np.empty(n),
-            "wrinkle_parameter": np.empty(n),
-            "energy": np.empty(n),
-        }
+        response = WrinklingResponse(
+            state=np.empty(n, dtype=np.int8),
+            stress=np.empty((n, 2, 2)),
+            tangent=np.empty((n, 3, 3)) if stiffness else None,
+            thickness=np.empty(n),
+            wrinkle_angle=np.empty(n),
+            wrinkle_parameter=np.empty(n),
+            energy=np.empty(n),
+        )
+        fields = {f.name: getattr(response, f.name) for f in dataclass_fields(response)}
         failed = []
         for start in range(0, n, _BLOCK):
             block = slice(start, min(start + _BLOCK, n))
@@ -197,7 +199,6 @@ class MembraneElements:
             )
         if failed:
             raise WrinklingError(np.concatenate(failed))
-        response = WrinklingResponse(**fields)
         return ElementResult(F, response, forces, K, g.area * response.energy)
 
     def _forces_and_stiffness(self, F, elements, response, stiffness, forces=None, K=None,

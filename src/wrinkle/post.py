@@ -183,6 +183,8 @@ def material_response(material: Material | Wrinkling, F: ArrayLike) -> PointResp
         raise ValueError("material_response: F is singular (the material point is collapsed)")
     wrinkling = material if isinstance(material, Wrinkling) else Wrinkling(material)
     r = wrinkling.response(C, tangent=True)
+    if r.tangent is None:  # pragma: no cover - asked for above
+        raise ValueError("material_response: the material gave no tangent")
     q = plane_quantities(C, r)
     return PointResponse(
         state=STATE_NAMES[int(r.state[0])],

@@ -126,8 +126,9 @@ def _tokenize(text: str) -> list[_Token]:
             lone_equals = character == "=" and text[position - 1 : position + 2].count("=") == 1
             hint = " (compare with '==')" if lone_equals else ""
             raise _ParseError(f"unexpected {character!r}", position + 1, hint)
-        if match.lastgroup != "space":
-            tokens.append(_Token(match.lastgroup, match.group(), position + 1))
+        kind = match.lastgroup or "space"  # every alternative of _TOKEN is a named group
+        if kind != "space":
+            tokens.append(_Token(kind, match.group(), position + 1))
         position = match.end()
     tokens.append(_Token("end", "", len(text) + 1))
     return tokens

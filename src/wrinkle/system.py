@@ -164,12 +164,11 @@ class DiscreteSystem:
         nodes = self.mesh.nodes
         for indices, elements in self.groups:
             g = elements.geometry
-            material = elements.material.material
-            stiffness = np.linalg.norm(material.response(np.eye(2)[None]).tangent)
+            stiffness = elements.material.reference_stiffness
             extent = np.abs(nodes[self.mesh.triangles[indices]]).max(axis=(1, 2))
             coordinate_noise = extent * np.abs(g.shape_gradient).max(axis=(1, 2))
             per_element = g.area * np.linalg.norm(g.shape_gradient.reshape(-1, 6), axis=1)
-            total += (stiffness * np.linalg.norm(per_element * (1.0 + coordinate_noise))) ** 2
+            total += float(stiffness * np.linalg.norm(per_element * (1.0 + coordinate_noise))) ** 2
         return float(10 * np.finfo(float).eps * np.sqrt(total))
 
     def step_metric(self) -> np.ndarray:
@@ -315,7 +314,10 @@ class DiscreteSystem:
             return forces, None
         K = np.zeros((self.mesh.n_elements, 9, 9))
         for elements, k in blocks:
-            np.add.at(K, elements, k)
+            if isinstance(elements, slice):
+                K[elements] += k
+            else:
+                np.add.at(K, elements, k)
         return forces, K
 
     def subtract_pressure_stiffness(
@@ -404,7 +406,7 @@ class StepProblem:
         """
         system, timer = self.system, self.timer
         pattern = system.pattern
-        data = np.zeros(pattern.nnz) if stiffness else None
+        data = np.zeros(pattern.nnz) if stiffness else np.empty(0)  # the stiffness' CSR data
 
         with timer.part(ELEMENTS):
             x = system.element_coordinates(u)  # shared by the elements and the pressure
@@ -454,7 +456,7 @@ class StepProblem:
             int(np.count_nonzero(state == SLACK)),
         )
         K = None
-        if data is not None:
+        if stiffness:
             with timer.part(ASSEMBLY):
                 if lift is not None:
                     coupling = pattern.matrix(data) @ lift

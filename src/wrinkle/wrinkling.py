@@ -127,8 +127,12 @@ class Wrinkling:
         self.tolerance = tolerance
         # stress that round-off in E = (C - I)/2 alone produces: a principal stress above
         # -stress_noise is not a compression (else an undeformed membrane would wrinkle by noise)
-        reference_stiffness = np.linalg.norm(material.response(np.eye(2)[None]).tangent)
-        self.stress_noise = 64.0 * np.finfo(float).eps * reference_stiffness
+        tangent = material.response(np.eye(2)[None]).tangent
+        if tangent is None:
+            raise ValueError("the material gives no tangent")
+        #: |dN/dE| of the material at C = I, force per length
+        self.reference_stiffness = float(np.linalg.norm(tangent))
+        self.stress_noise = 64.0 * np.finfo(float).eps * self.reference_stiffness
 
     @property
     def thickness(self) -> float:

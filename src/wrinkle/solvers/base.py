@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import logging
+from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -12,7 +14,7 @@ import scipy.sparse as sp
 from wrinkle.solvers.linear import SymmetryCheck, diagonal_positions, make_linear_solver
 from wrinkle.timing import LINEAR, Stopwatch
 
-__all__ = ["ConvergenceError", "Evaluation", "EvaluationFailure", "Problem", "RegularisedSolver", "SolverResult", "is_converged", "log_iteration", "shifted", "stiffness_scale", "try_evaluate"]
+__all__ = ["ConvergenceError", "Evaluation", "EvaluationFailure", "LinearSolver", "Problem", "RegularisedSolver", "SolverResult", "is_converged", "log_iteration", "shifted", "stiffness_scale", "try_evaluate"]
 
 logger = logging.getLogger("wrinkle.solver")
 
@@ -55,6 +57,22 @@ class Evaluation:
     @property
     def residual_norm(self) -> float:
         return float(np.linalg.norm(self.residual))
+
+    @property
+    def tangent(self) -> sp.csr_matrix:
+        """The stiffness of an evaluation made with it (ValueError if made without)."""
+        if self.stiffness is None:
+            raise ValueError("this evaluation was made without the stiffness")
+        return self.stiffness
+
+
+class LinearSolver(Protocol):
+    """A sparse linear back-end (``wrinkle.solvers.linear``): a solve function for A, or None
+    if A is singular."""
+
+    def factorise(
+        self, A: sp.csr_matrix, symmetric: bool
+    ) -> Callable[[np.ndarray], np.ndarray] | None: ...
 
 
 class Problem(Protocol):
@@ -146,7 +164,7 @@ def log_iteration(method: str, iteration: int, evaluation: Evaluation,
     )
 
 
-class RegularisedSolver:
+class RegularisedSolver(ABC):
     """Common loop of the two solvers: a regularised step, accepted or not by a gain ratio.
 
     Each iteration solves for a trial step with regularisation theta, compares the actual
@@ -175,28 +193,32 @@ class RegularisedSolver:
         self.tolerance = tolerance
         self.max_iterations = int(max_iterations)
         self.linear_solver = linear_solver
-        self.linear = None  # the back-end, made at the first solve (it depends on the size)
+        # the back-end, made at the first solve (it depends on the size)
+        self.linear: LinearSolver | None = None
         self._is_symmetric = SymmetryCheck()
         self._timer = Stopwatch()
 
-    def factorise(self, A: sp.csr_matrix, symmetric: bool):
+    def factorise(
+        self, A: sp.csr_matrix, symmetric: bool
+    ) -> Callable[[np.ndarray], np.ndarray] | None:
         """Solve function of the linear back-end for A (None if A is singular); the time of
         both goes to the problem's stopwatch. A matrix not known to be symmetric is checked
         (``SymmetryCheck``): the assembled tangent under follower pressure often is (the
         airbag's, to round-off), and the back-ends factorise symmetric matrices faster."""
         if self.linear is None:
             self.linear = make_linear_solver(self.linear_solver, A.shape[0])
-        timer = self._timer
+        linear, timer = self.linear, self._timer
         with timer.part(LINEAR):
             if not symmetric and not np.iscomplexobj(A.data):
                 symmetric = self._is_symmetric(A)
-            solve = self.linear.factorise(A, symmetric)
+            solve = linear.factorise(A, symmetric)
         if solve is None:
             return None
+        factorised = solve
 
         def timed_solve(b: np.ndarray) -> np.ndarray:
             with timer.part(LINEAR):
-                return solve(b)
+                return factorised(b)
 
         return timed_solve
 
@@ -209,25 +231,40 @@ class RegularisedSolver:
         acceptance test, for a predictor; None if the regularised tangent cannot be
         factorised. (n_dofs,)"""
         self._time_with(problem)
-        step, _ = self.trial_step(ev, self.initial_theta(ev.stiffness, problem.free), problem.free)
+        step, _ = self.trial_step(ev, self.initial_theta(ev.tangent, problem.free), problem.free)
         return step
 
     # to be defined by subclasses
-    def initial_theta(self, K: sp.csr_matrix, free: np.ndarray) -> float: ...
+    @abstractmethod
+    def initial_theta(self, K: sp.csr_matrix, free: np.ndarray) -> float:
+        """The regularisation of the first trial step of a solve."""
 
-    def trial_step(self, ev: Evaluation, theta: float, free: np.ndarray): ...
+    @abstractmethod
+    def trial_step(
+        self, ev: Evaluation, theta: float, free: np.ndarray
+    ) -> tuple[np.ndarray | None, float]:
+        """A trial step (n_dofs,) from ev with regularisation theta (None if the regularised
+        tangent cannot be factorised) and the decrease of the merit its model predicts."""
 
-    def gain_ratio(self, ev: Evaluation, trial: Evaluation, predicted: float) -> float: ...
+    @abstractmethod
+    def gain_ratio(self, ev: Evaluation, trial: Evaluation, predicted: float) -> float:
+        """Actual over predicted decrease of the merit from ev to the trial point."""
 
-    def increase(self, theta: float) -> float: ...
+    @abstractmethod
+    def increase(self, theta: float) -> float:
+        """Theta after a poor step (gain ratio below 0.25)."""
 
-    def decrease(self, theta: float) -> float: ...
+    @abstractmethod
+    def decrease(self, theta: float) -> float:
+        """Theta after a good step (gain ratio above 0.75)."""
 
-    def backtrack(self, problem: Problem, u: np.ndarray, ev: Evaluation, step: np.ndarray):
+    def backtrack(
+        self, problem: Problem, u: np.ndarray, ev: Evaluation, step: np.ndarray
+    ) -> tuple[np.ndarray, Evaluation] | None:
         """After a rejected step: (u, evaluation) of an acceptable point on a shorter step in
         the same direction, found without a new factorisation, or None (then theta grows and
         a new step is factorised). None here; a subclass may search."""
-        return
+        return None
 
     def solve(self, problem: Problem, u0: np.ndarray,
               at_start: Evaluation | None = None) -> SolverResult:
@@ -236,16 +273,17 @@ class RegularisedSolver:
         a start already in balance then costs no evaluation of the stiffness."""
         self._time_with(problem)
         u = np.array(u0, dtype=float)
-        ev = at_start
-        if ev is not None and is_converged(ev, self.tolerance):
-            log_iteration(self.method, 0, ev, None)
-            return SolverResult(u, 0, [ev.residual_norm], ev)
-        if ev is None or ev.stiffness is None:
-            ev = try_evaluate(problem, u)
-        if ev is None:
+        if at_start is not None and is_converged(at_start, self.tolerance):
+            log_iteration(self.method, 0, at_start, None)
+            return SolverResult(u, 0, [at_start.residual_norm], at_start)
+        start = at_start
+        if start is None or start.stiffness is None:
+            start = try_evaluate(problem, u)
+        if start is None:
             raise ConvergenceError(f"{self.method}: the starting point cannot be evaluated", [])
+        ev = start
         history = [ev.residual_norm]
-        theta = self.initial_theta(ev.stiffness, problem.free)
+        theta = self.initial_theta(ev.tangent, problem.free)
         for iteration in range(self.max_iterations + 1):
             log_iteration(self.method, iteration, ev, theta)
             if is_converged(ev, self.tolerance):
@@ -262,7 +300,7 @@ class RegularisedSolver:
                     theta = self.increase(theta)
                 elif rho > 0.75:
                     theta = self.decrease(theta)
-                if rho > 0.0:
+                if rho > 0.0 and step is not None and trial is not None:
                     u = u + step
                     ev = trial
                     break

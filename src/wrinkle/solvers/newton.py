@@ -32,6 +32,7 @@ import scipy.sparse as sp
 
 from wrinkle.solvers.base import (
     Evaluation,
+    Problem,
     RegularisedSolver,
     shifted,
     stiffness_scale,
@@ -54,14 +55,14 @@ class RegularisedNewton(RegularisedSolver):
     method = "newton"
     default_max_iterations = 100
 
-    def initial_theta(self, K, free) -> float:
+    def initial_theta(self, K: sp.csr_matrix, free: np.ndarray) -> float:
         self._scale = stiffness_scale(K, free)
-        self._metric_scale = None
+        self._metric_scale: float | None = None
         return 1e-8
 
     def regularised(self, ev: Evaluation, theta: float, free: np.ndarray) -> sp.csr_matrix:
         """K + theta M (module docstring) on K's own pattern."""
-        K = ev.stiffness
+        K = ev.tangent
         if ev.metric is None:
             return shifted(K, theta * self._scale, free, ev.diagonal)
         positions = ev.diagonal if ev.diagonal is not None else diagonal_positions(K)
@@ -73,7 +74,9 @@ class RegularisedNewton(RegularisedSolver):
         data[positions[free]] += _IDENTITY_SHARE * theta * self._scale
         return sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
 
-    def trial_step(self, ev: Evaluation, theta: float, free: np.ndarray):
+    def trial_step(
+        self, ev: Evaluation, theta: float, free: np.ndarray
+    ) -> tuple[np.ndarray | None, float]:
         """Step and the decrease predicted for the merit in use: the potential energy by its
         quadratic model, or (no potential, or a decrease at round-off) |r|^2 by its
         Gauss-Newton model. From a flat membrane under pressure only the energy model sees the
@@ -85,7 +88,7 @@ class RegularisedNewton(RegularisedSolver):
         if not np.all(np.isfinite(step)):
             return None, 0.0
         r = ev.residual
-        K_step = ev.stiffness @ step
+        K_step = ev.tangent @ step
         # the energy model along the step, r.du and du.K.du, kept for ``backtrack``
         self._slope, self._curvature = float(r @ step), float(step @ K_step)
         energy_model = self._slope - 0.5 * self._curvature
@@ -100,7 +103,9 @@ class RegularisedNewton(RegularisedSolver):
             return actual / predicted if np.isfinite(actual) else -np.inf
         return (ev.residual_norm**2 - trial.residual_norm**2) / predicted
 
-    def backtrack(self, problem, u: np.ndarray, ev: Evaluation, step: np.ndarray):
+    def backtrack(
+        self, problem: Problem, u: np.ndarray, ev: Evaluation, step: np.ndarray
+    ) -> tuple[np.ndarray, Evaluation] | None:
         """Fractions of a rejected step (module docstring): (u, evaluation) or None."""
         if not self._use_energy:
             return None

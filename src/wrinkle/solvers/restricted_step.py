@@ -13,7 +13,10 @@ iteration ends as Newton's; the step is taken if rho > 0.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+import scipy.sparse as sp
 
 from wrinkle.solvers.base import Evaluation, RegularisedSolver, shifted, stiffness_scale
 
@@ -33,18 +36,26 @@ class RestrictedStep(RegularisedSolver):
     # force scale (tests/test_solvers.py), while from the moved supports alone it converges
     tangent_predictor = False
 
-    def initial_theta(self, K, free) -> float:
+    def initial_theta(self, K: sp.csr_matrix, free: np.ndarray) -> float:
         self._scale = stiffness_scale(K, free)
         return 2.0 * (1e-3 * self._scale) ** 2
 
-    def trial_step(self, ev: Evaluation, theta: float, free: np.ndarray):
+    def trial_step(
+        self, ev: Evaluation, theta: float, free: np.ndarray
+    ) -> tuple[np.ndarray | None, float]:
         r = ev.residual
-        K = ev.stiffness
+        K = ev.tangent
+        solve: Callable[[np.ndarray], np.ndarray] | None
         if ev.symmetric:
             mu = np.sqrt(theta / 2.0)
             complex_solve = self.factorise(shifted(K, -1j * mu, free, ev.diagonal), True)
-            solve = (lambda rhs: complex_solve(rhs.astype(complex)).real) \
-                if complex_solve else None
+            if complex_solve is None:
+                return None, 0.0
+            factorised = complex_solve
+
+            def solve(rhs: np.ndarray) -> np.ndarray:
+                return factorised(rhs.astype(complex)).real
+
             rhs = r
         else:  # follower loads: form 2 K^T K (denser) as the paper does
             normal = (K.T @ K).tocsr()
