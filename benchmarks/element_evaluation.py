@@ -42,9 +42,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 # (module, attribute path, label): the functions timed as parts, where they exist
 PARTS = [
-    ("wrinkle.model", "StepProblem.evaluate", "problem: residual, energy, matrix (rest)"),
-    ("wrinkle.model", "Model.evaluate_elements", "element coordinates x[triangles]"),
-    ("wrinkle.model", "Model.element_coordinates", "element coordinates x[triangles]"),
+    ("wrinkle.system", "StepProblem.evaluate", "problem: residual, energy, matrix (rest)"),
+    ("wrinkle.system", "DiscreteSystem.evaluate_elements", "element coordinates x[triangles]"),
+    ("wrinkle.system", "DiscreteSystem.element_coordinates", "element coordinates x[triangles]"),
     ("wrinkle.element", "MembraneElements.evaluate", "element blocks: copies (rest)"),
     ("wrinkle.element", "deformation_gradient", "deformation gradient F"),
     ("wrinkle.element", "right_cauchy_green", "Cauchy-Green C"),
@@ -68,11 +68,11 @@ PARTS = [
     ("wrinkle.compiled", "element_stiffness", "element stiffness (Numba)"),
     ("wrinkle.element", "element_stiffness", "element stiffness (NumPy)"),
     ("wrinkle.element", "strain_displacement", "B matrix (NumPy)"),
-    ("wrinkle.model", "Model.subtract_pressure_stiffness", "pressure stiffness"),
+    ("wrinkle.system", "DiscreteSystem.subtract_pressure_stiffness", "pressure stiffness"),
     ("wrinkle.assembly", "SparsityPattern.add_to_data", "scatter into CSR data"),
     ("wrinkle.assembly", "SparsityPattern.assemble_vector", "assemble force vector"),
-    ("wrinkle.model", "Model.follower_forces", "pressure forces"),
-    ("wrinkle.model", "Model.pressure_work", "pressure work (energy)"),
+    ("wrinkle.system", "DiscreteSystem.follower_forces", "pressure forces"),
+    ("wrinkle.system", "DiscreteSystem.pressure_work", "pressure work (energy)"),
 ]
 
 
@@ -80,15 +80,15 @@ def airbag_model(nx: int):
     from wrinkle.case import read_case
 
     return read_case(ROOT / "examples" / "airbag.toml",
-                     overrides={"mesh": {"rectangle": {"nx": nx, "ny": nx}}})
+                     overrides={"mesh": {"rectangle": {"nx": nx, "ny": nx}}}).model
 
 
 # -- states -----------------------------------------------------------------------------
 def make_states(path: Path, nx: int, iterations: list[int]) -> None:
     """Solve the airbag for max(iterations) Newton iterations; save u at the accepted point of
     each iteration in ``iterations`` and print the evaluations per iteration."""
-    from wrinkle.model import StepProblem
     from wrinkle.solvers.base import ConvergenceError
+    from wrinkle.system import StepProblem
 
     model = airbag_model(nx)
     current = {"iteration": -1, "u": None}

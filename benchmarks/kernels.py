@@ -99,7 +99,8 @@ def benchmark_case(n_elements: float, material: str = "ti"):
     """(mesh, MembraneElements, current element coordinates (n, 3, 3)) of one benchmark size."""
     mesh = benchmark_mesh(n_elements)
     geometry = reference_geometry(mesh.nodes, mesh.triangles)
-    elements = MembraneElements(geometry, Wrinkling(make_material(material)))
+    elements = MembraneElements(geometry, Wrinkling(make_material(material)),
+                                compiled=compiled.enabled(mesh.n_elements))
     x_elements = element_coordinates(benchmark_deformation(mesh.nodes), mesh.triangles)
     return mesh, elements, x_elements
 
@@ -154,7 +155,7 @@ def run_size(n_elements: float, material: str, repeat: int) -> dict:
         data = np.zeros(pattern.nnz)
         for start in range(0, mesh.n_elements, KERNEL_BLOCK):
             block = slice(start, min(start + KERNEL_BLOCK, mesh.n_elements))
-            pattern.add_to_data(data, block, stiffness[block])
+            pattern.add_to_data(data, block, stiffness[block], compiled=elements.compiled)
         holder["data"] = data
         holder["vector"] = pattern.assemble_vector(forces)
 

@@ -43,7 +43,7 @@ def resident_mb() -> float:
 def coarse_solution(n: int = 32):
     """Converged airbag displacements on an n x n grid of squares, as an interpolant of
     (X, Y) giving (ux, uy, uz)."""
-    model = read_case(CASE, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}})
+    model = read_case(CASE, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}}).model
     u = model.solve(tolerance=1e-8).final.displacement.reshape(-1, 3)
     side = model.mesh.nodes[:, 0].max()
     grid = np.linspace(0.0, side, n + 1)
@@ -54,7 +54,7 @@ def coarse_solution(n: int = 32):
 
 def airbag_matrix(n: int, interpolant):
     """Shifted tangent A (CSR), right-hand side b and symmetry flag of the n x n airbag."""
-    model = read_case(CASE, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}})
+    model = read_case(CASE, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}}).model
     X = model.mesh.nodes
     u = interpolant(np.column_stack([X[:, 1], X[:, 0]])).ravel()
     problem = model.discretise().at(1.0)

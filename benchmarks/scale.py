@@ -73,7 +73,7 @@ class Progress(logging.Handler):
     (``step``), its last iteration (``step_iteration``), the residual and the residual needed
     (tolerance x force scale; the solver also accepts one at round-off, which is not logged),
     and ``time_split``: whether the seconds per part are known (from the solve's stopwatch,
-    found through ``watch``; without it they are NaN)."""
+    ``stopwatch``; without it they are NaN)."""
 
     ITERATION = re.compile(r"iteration\s+(\d+): residual (\S+) \(scale (\S+)\)")
     STEP = re.compile(r"load factor \S+ converged in (\d+) iterations")
@@ -84,18 +84,7 @@ class Progress(logging.Handler):
         self.per_step: list[int] = []  # iterations of the converged load steps
         self.iteration = 0  # last iteration of the step being solved
         self.residual = self.needed = float("nan")
-        self.stopwatch = None
-
-    def watch(self, model) -> None:
-        """Note the stopwatch ``model.solve`` passes to each load step (``Results.stopwatch``),
-        for the time split of the partial rows."""
-        solve_step = model.solve_step
-
-        def watched(*args, timer=None, **kwargs):
-            self.stopwatch = timer
-            return solve_step(*args, timer=timer, **kwargs)
-
-        model.solve_step = watched
+        self.stopwatch = None  # the solve's (Results.stopwatch), for the time split
 
     def emit(self, record: logging.LogRecord) -> None:
         message = record.getMessage()
@@ -123,32 +112,36 @@ def solve_one(problem: str, n: int, linear_solver: str, max_iterations: int | No
     import numpy as np
 
     from wrinkle.case import read_case
-    from wrinkle.model import SOLVE_DEFAULTS
-    from wrinkle.solvers import ConvergenceError
+    from wrinkle.results import Results
+    from wrinkle.solvers import ConvergenceError, follow_load_path
     from wrinkle.solvers.linear import make_linear_solver
 
     start = time.perf_counter()
-    case = ROOT / "examples" / f"{problem}.toml"
-    model = read_case(case, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}})
-    steps = model.solver_settings.get("steps", 1)
+    case = read_case(ROOT / "examples" / f"{problem}.toml",
+                     overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}})
+    model = case.model
+    steps = case.settings.steps
+    # the case's load steps, no cut-back: a failed step ends the run
+    settings = case.settings.replace(linear_solver=linear_solver, max_iterations=max_iterations,
+                                     min_step=1.0 / steps)
     known = {"problem": problem, "elements": model.mesh.n_elements,
              "unknowns": int(np.count_nonzero(~model.constrained)), "steps": steps,
              "result_name": RESULT_NAMES[problem],
              "linear_solver": make_linear_solver(linear_solver, model.n_dofs).name}
     log = logging.getLogger("wrinkle")  # the solver's "wrinkle.solver" messages come here too
     level = log.level
+    results = Results(model)  # what Model.solve does, with the stopwatch in reach
     if progress:
-        tolerance = {**SOLVE_DEFAULTS, **model.solver_settings}["tolerance"]
-        handler = Progress(progress, known, start, tolerance)
-        handler.watch(model)
+        handler = Progress(progress, known, start, settings.tolerance)
+        handler.stopwatch = results.stopwatch
         log.addHandler(handler)
         log.setLevel(logging.INFO)
     failed = None
-    try:  # the case's load steps, no cut-back: a failed step ends the run
-        results = model.solve(linear_solver=linear_solver, max_iterations=max_iterations,
-                              min_step=1.0 / steps)
+    try:
+        follow_load_path(model.discretise(), settings.solver(), settings.controller(),
+                         on_step=results.append, timer=results.stopwatch)
     except ConvergenceError as error:
-        results, failed = error.results, error
+        failed = error
     finally:
         if progress:
             log.removeHandler(handler)
@@ -161,7 +154,7 @@ def solve_one(problem: str, n: int, linear_solver: str, max_iterations: int | No
     if failed is None:
         u = results.final.displacement
         if problem == "airbag":
-            centre = model.probes["centre"]
+            centre = case.probes["centre"]
             result = 1e3 * float(u.reshape(-1, 3)[centre, 2].mean())
         else:
             top = model.mesh.node_sets["top"]
