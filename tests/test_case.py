@@ -11,31 +11,19 @@ import wrinkle
 from wrinkle.case import CaseError, read_case
 from wrinkle.solvers import SolverSettings
 
+# inline tables and arrays of them: the same case as [material], [[support]] tables
 CASE = """
 title = "pulled sheet"
+material = {model = "svk", E = 1000.0, nu = 0.3, thickness = 0.01}
+support = [
+    {nodes = "y == 0", fix = ["x", "y", "z"]},
+    {label = "top", nodes = "y == 1", displacement = [0.05, 0.02, 0.0]},
+]
+probe = [{name = "corner", nodes = "x == 1 and y == 1"}]
 
 [mesh]
 rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}
 units = {length = "m", force = "N"}
-
-[material]
-model = "svk"
-E = 1000.0
-nu = 0.3
-thickness = 0.01
-
-[[support]]
-nodes = "y == 0"
-fix = ["x", "y", "z"]
-
-[[support]]
-label = "top"
-nodes = "y == 1"
-displacement = [0.05, 0.02, 0.0]
-
-[[probe]]
-name = "corner"
-nodes = "x == 1 and y == 1"
 """
 
 
