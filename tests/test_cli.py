@@ -4,17 +4,19 @@ disk."""
 
 import json
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import meshio
 import numpy as np
 import pytest
 
+from verification.paper_test import paper_material
+from verification.references.relaxed_energy import relax
+from verification.references.shear_stretch import homogeneous_edge_forces
 from wrinkle.cli import main
-from wrinkle.demo import paper_material
 from wrinkle.materials import StVenantKirchhoff
-from wrinkle.verification.relaxed_energy import relax
-from wrinkle.verification.shear_stretch import homogeneous_edge_forces
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 CELL_FIELDS = {"state", "tension_direction", "principal_stress", "wrinkling_strain", "thickness"}
@@ -113,33 +115,64 @@ def _write_mesh(folder, points, triangles):
 
 BAD_INPUTS = [
     # (what, edit of the base case, message fragment)
-    ("unknown key", lambda c: c.replace("nu = 0.3", "nu = 0.3\ncolour = 1"),
-     "unknown key 'colour'"),
+    (
+        "unknown key",
+        lambda c: c.replace("nu = 0.3", "nu = 0.3\ncolour = 1"),
+        "unknown key 'colour'",
+    ),
     ("missing value", lambda c: c.replace("E = 1000.0\n", ""), "missing key 'E'"),
     ("wrong type", lambda c: c.replace("E = 1000.0", 'E = "stiff"'), "'E' must be a number"),
-    ("negative thickness", lambda c: c.replace("thickness = 0.01", "thickness = -0.01"),
-     "thickness must be finite and > 0"),
-    ("negative modulus", lambda c: c.replace("E = 1000.0", "E = -1000.0"),
-     "E must be finite and > 0"),
-    ("mesh file missing", lambda c: c.replace(
-        "rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}", 'file = "nowhere.msh"'),
-     "nowhere.msh"),
-    ("degenerate element", lambda c: c.replace(
-        "rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}", f'file = "{TRIANGLE_VTU}"'),
-     "zero area"),
-    ("duplicate element", lambda c: c.replace(
-        "rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}", f'file = "{TRIANGLE_VTU}"'),
-     "duplicate"),
-    ("rigid-body motion", lambda c: c.replace('fix = ["x", "y", "z"]', 'fix = ["x", "y"]')
-     .replace("displacement = [0.05, 0.02, 0.0]", 'displacement = [0.05, 0.02, "free"]'),
-     "do not prevent translation in z"),
-    ("rotation unrestrained", lambda c: c.replace('nodes = "y == 0"', 'nodes = "x == 0 and y == 0"')
-     .replace("displacement = [0.05, 0.02, 0.0]", 'displacement = ["free", 0.02, "free"]'),
-     "and rotation about y"),
-    ("selector matches nothing", lambda c: c.replace('nodes = "y == 0"', 'nodes = "y == 5"'),
-     "matches no node"),
-    ("bad selector", lambda c: c.replace('nodes = "y == 0"', 'nodes = "y === 0"'),
-     "unexpected"),
+    (
+        "negative thickness",
+        lambda c: c.replace("thickness = 0.01", "thickness = -0.01"),
+        "thickness must be finite and > 0",
+    ),
+    (
+        "negative modulus",
+        lambda c: c.replace("E = 1000.0", "E = -1000.0"),
+        "E must be finite and > 0",
+    ),
+    (
+        "mesh file missing",
+        lambda c: c.replace(
+            "rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}", 'file = "nowhere.msh"'
+        ),
+        "nowhere.msh",
+    ),
+    (
+        "degenerate element",
+        lambda c: c.replace(
+            "rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}", f'file = "{TRIANGLE_VTU}"'
+        ),
+        "zero area",
+    ),
+    (
+        "duplicate element",
+        lambda c: c.replace(
+            "rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}", f'file = "{TRIANGLE_VTU}"'
+        ),
+        "duplicate",
+    ),
+    (
+        "rigid-body motion",
+        lambda c: c.replace('fix = ["x", "y", "z"]', 'fix = ["x", "y"]').replace(
+            "displacement = [0.05, 0.02, 0.0]", 'displacement = [0.05, 0.02, "free"]'
+        ),
+        "do not prevent translation in z",
+    ),
+    (
+        "rotation unrestrained",
+        lambda c: c.replace('nodes = "y == 0"', 'nodes = "x == 0 and y == 0"').replace(
+            "displacement = [0.05, 0.02, 0.0]", 'displacement = ["free", 0.02, "free"]'
+        ),
+        "and rotation about y",
+    ),
+    (
+        "selector matches nothing",
+        lambda c: c.replace('nodes = "y == 0"', 'nodes = "y == 5"'),
+        "matches no node",
+    ),
+    ("bad selector", lambda c: c.replace('nodes = "y == 0"', 'nodes = "y === 0"'), "unexpected"),
     ("not TOML", lambda c: c + "\n[[[", "not valid TOML"),
 ]
 
@@ -238,22 +271,29 @@ def test_fibre_directions_per_region_or_from_cell_data(tmp_path, source):
         tags = [np.full(left.sum(), 1), np.full((~left).sum(), 2)]
         meshio.write(
             tmp_path / "strip.msh",
-            meshio.Mesh(mesh.nodes, cells,
-                        cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
-                        field_data={"left": np.array([1, 2]), "right": np.array([2, 2])}),
-            file_format="gmsh22", binary=False,
+            meshio.Mesh(
+                mesh.nodes,
+                cells,
+                cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
+                field_data={"left": np.array([1, 2]), "right": np.array([2, 2])},
+            ),
+            file_format="gmsh22",
+            binary=False,
         )
-        materials = (f'[mesh]\nfile = "strip.msh"\n'
-                     f'[[material]]\nregion = "left"\ndirection = [1.0, 0.0, 0.0]\n'
-                     f"{STRIP_MATERIAL}"
-                     f'[[material]]\nregion = "right"\ndirection = [0.0, 1.0, 0.0]\n'
-                     f"{STRIP_MATERIAL}")
+        materials = (
+            f'[mesh]\nfile = "strip.msh"\n'
+            f'[[material]]\nregion = "left"\ndirection = [1.0, 0.0, 0.0]\n'
+            f"{STRIP_MATERIAL}"
+            f'[[material]]\nregion = "right"\ndirection = [0.0, 1.0, 0.0]\n'
+            f"{STRIP_MATERIAL}"
+        )
     else:
         fibre = np.where(left[:, None], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
-        meshio.write(tmp_path / "strip.vtu", meshio.Mesh(
-            mesh.nodes, cells, cell_data={"fibre": [fibre[left], fibre[~left]]}))
-        materials = (f'[mesh]\nfile = "strip.vtu"\n'
-                     f'[material]\ndirection = "fibre"\n{STRIP_MATERIAL}')
+        meshio.write(
+            tmp_path / "strip.vtu",
+            meshio.Mesh(mesh.nodes, cells, cell_data={"fibre": [fibre[left], fibre[~left]]}),
+        )
+        materials = f'[mesh]\nfile = "strip.vtu"\n[material]\ndirection = "fibre"\n{STRIP_MATERIAL}'
     case = tmp_path / "case.toml"
     case.write_text(materials + STRIP_SUPPORTS)
     model = wrinkle.read_case(case).model
@@ -261,3 +301,23 @@ def test_fibre_directions_per_region_or_from_cell_data(tmp_path, source):
     middle = np.isclose(model.mesh.nodes[:, 0], 1.0)
     l1 = brentq(lambda a: 5 * a * (a**2 - 1) - (2.01 - a) * ((2.01 - a) ** 2 - 1), 1.0, 1.01)
     np.testing.assert_allclose(u[middle, 0], l1 - 1.0, rtol=1e-8)
+
+
+def test_version_and_python_dash_m(capsys):
+    """``wrinkle --version`` prints the installed version; ``python -m wrinkle`` is the same
+    command line; the paper's test and the gallery are no commands of the installed program."""
+    import wrinkle
+
+    with pytest.raises(SystemExit) as stop:
+        main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.strip() == f"wrinkle {wrinkle.__version__}"
+    done = subprocess.run(
+        [sys.executable, "-m", "wrinkle", "--version"], capture_output=True, text=True
+    )
+    assert done.returncode == 0 and done.stdout.strip() == f"wrinkle {wrinkle.__version__}"
+    for removed in ("demo", "verify"):
+        with pytest.raises(SystemExit) as stop:
+            main([removed])
+        assert stop.value.code == 2
+    capsys.readouterr()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import struct
+import sys
 import time
 from pathlib import Path
 
@@ -46,8 +47,12 @@ def check_pictures(paths: list[Path], out: Path) -> None:
 def test_three_pictures_with_probes_and_units(solved, tmp_path):
     model, results = solved
     mesh = model.mesh
-    save_results(results, tmp_path, probes={"top": mesh.node_sets["top"], "centre": [12]},
-                 units={"length": "m", "force": "N"})
+    save_results(
+        results,
+        tmp_path,
+        probes={"top": mesh.node_sets["top"], "centre": [12]},
+        units={"length": "m", "force": "N"},
+    )
     check_pictures(plot_results(tmp_path), tmp_path)
 
 
@@ -95,8 +100,7 @@ def test_tension_lines_through_centroids_along_the_tension():
 
     fine = wrinkle.rectangle(2.0, 1.0, 100, 50)
     tension = np.tile([1.0, 0.0, 0.0], (fine.n_elements, 1))
-    segments, sampled = _tension_lines(fine.nodes, fine.triangles, tension, (0, 1),
-                                       lines_across=40)
+    segments, sampled = _tension_lines(fine.nodes, fine.triangles, tension, (0, 1), lines_across=40)
     assert sampled and 20 * 40 <= segments.shape[0] <= 21 * 41
     np.testing.assert_allclose(np.ptp(segments[:, :, 0], axis=1), 0.7 * 2.0 / 40)
 
@@ -104,13 +108,18 @@ def test_tension_lines_through_centroids_along_the_tension():
 def test_ten_thousand_elements_in_about_a_second(tmp_path):
     """A 10^4-element result (a made-up smooth displacement, evaluated as a step) plots in
     about a second once matplotlib and meshio are imported."""
-    from wrinkle.model import StepResult
+    from wrinkle.results import StepResult
 
     mesh = wrinkle.rectangle(2.0, 1.0, 100, 50)
     model = wrinkle.Model(mesh, StVenantKirchhoff.isotropic(E=1.0, nu=0.3, thickness=1.0))
     X = mesh.nodes
-    u = np.column_stack([0.2 * X[:, 1], 0.03 * np.sin(3 * X[:, 0]) * X[:, 1],
-                         0.02 * np.sin(np.pi * X[:, 0]) * np.sin(np.pi * X[:, 1])])
+    u = np.column_stack(
+        [
+            0.2 * X[:, 1],
+            0.03 * np.sin(3 * X[:, 0]) * X[:, 1],
+            0.02 * np.sin(np.pi * X[:, 0]) * np.sin(np.pi * X[:, 1]),
+        ]
+    )
     writer = ResultWriter(tmp_path, model, probes={"top": mesh.node_sets["top"]})
     writer.write_step(StepResult(1.0, u.ravel(), 1, 0.0, np.zeros(model.n_dofs), (0, 0, 0)))
     writer.finish(True, "made up")
@@ -118,3 +127,27 @@ def test_ten_thousand_elements_in_about_a_second(tmp_path):
     start = time.perf_counter()
     check_pictures(plot_results(tmp_path), tmp_path)
     assert time.perf_counter() - start < 5.0  # about 1 s on 2 cores; generous for CI
+
+
+def test_pictures_leave_the_backend_alone(solved, tmp_path):
+    """Drawing uses matplotlib.figure.Figure, not pyplot: a backend the user chose (here
+    "svg") is still the backend afterwards, and no pyplot figure is left open."""
+    import matplotlib
+
+    before = matplotlib.get_backend()
+    matplotlib.use("svg")
+    try:
+        import wrinkle.plot
+
+        _, results = solved
+        save_results(results, tmp_path)
+        wrinkle.plot.plot_results(tmp_path)
+        figure = wrinkle.plot.new_figure(figsize=(2, 2))
+        figure.subplots().plot([0, 1], [0, 1])
+        figure.savefig(tmp_path / "line.png")
+        assert matplotlib.get_backend() == "svg"
+        assert matplotlib.rcParams["backend"] == "svg"
+        if "matplotlib.pyplot" in sys.modules:
+            assert not sys.modules["matplotlib.pyplot"].get_fignums()
+    finally:
+        matplotlib.use(before)

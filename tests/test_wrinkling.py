@@ -3,15 +3,15 @@
 References: the plain material law (taut), the paper's conditions on the Cauchy stress of the
 modified deformation (Part II, eqs. 31-33), the minor principal direction of C (isotropy), and
 the relaxed energy min over A >= 0 of w(C + A) computed by a generic minimiser in
-wrinkle.verification (Pipkin 1986), which shares no code with wrinkle.wrinkling.
+verification.references (Pipkin 1986), which shares no code with wrinkle.wrinkling.
 """
 
 import numpy as np
 import pytest
 
+from verification.references.relaxed_energy import relax
 from wrinkle import material_response
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
-from wrinkle.verification.relaxed_energy import relax
 from wrinkle.wrinkling import TAUT, WRINKLED, Wrinkling
 
 RNG = np.random.default_rng(20261122)

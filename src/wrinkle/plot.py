@@ -1,4 +1,9 @@
-"""Pictures with matplotlib (an optional dependency: pip install "wrinkle[plot]")."""
+"""Pictures with matplotlib (an optional dependency: pip install "wrinkle[plot]").
+
+The figures are ``matplotlib.figure.Figure`` objects made without pyplot (``new_figure``), so
+drawing them neither selects nor switches matplotlib's backend: an interactive session keeps
+its own.
+"""
 
 from __future__ import annotations
 
@@ -7,68 +12,48 @@ import json
 import os
 import textwrap
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from wrinkle.verification.shear_stretch import shear_stretch_curves
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from wrinkle.model import Model
+
+__all__ = [
+    "AXIS_NAMES",
+    "STATE_COLOURS",
+    "colour_cycle",
+    "new_figure",
+    "plot_convergence",
+    "plot_results",
+    "plot_state_map",
+]
+
+_NO_MATPLOTLIB = 'pictures need matplotlib; install it with pip install "wrinkle[plot]"'
 
 
-def _pyplot():
+def new_figure(**kwargs: Any) -> Figure:
+    """A ``matplotlib.figure.Figure(**kwargs)`` (figsize, layout, ...), made without pyplot:
+    no backend is selected or switched, and nothing keeps the figure alive once it is saved
+    (``fig.savefig(path)``). Raises ImportError with the install command if matplotlib is
+    missing."""
     try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        from matplotlib.figure import Figure
     except ImportError:  # pragma: no cover - depends on the installation
-        raise SystemExit(
-            'wrinkle: pictures need matplotlib; install it with pip install "wrinkle[plot]"'
-        ) from None
-    return plt
+        raise ImportError(_NO_MATPLOTLIB) from None
+    return Figure(**kwargs)
 
 
-def plot_shear_stretch(rows, path: Path, shear: float) -> None:
-    """Two panels like the paper's Figs. 6 and 7: F1(v) and F2(v) for each anisotropy f.
-
-    Lines: the independent homogeneous solution; markers: finite-element results (filled where
-    the elements are wrinkled, open where taut); a dotted line marks the taut/wrinkled change.
-    """
-    from wrinkle.demo import paper_material
-
-    plt = _pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
-    anisotropies = sorted({r.f for r in rows})
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for colour, f in zip(colours, anisotropies):
-        mine = [r for r in rows if r.f == f]
-        v = np.array([r.v for r in mine])
-        fine = np.linspace(v.min(), v.max(), 81)
-        curves = shear_stretch_curves(paper_material(f), shear, fine)
-        change = [
-            0.5 * (fine[i] + fine[i + 1])
-            for i in range(fine.size - 1)
-            if curves.state[i] != curves.state[i + 1]
-        ]
-        for ax, name, analytic in ((axes[0], "F1", curves.F1), (axes[1], "F2", curves.F2)):
-            ax.plot(fine, analytic, "-", color=colour, lw=1.2, label=f"analytic, f = {f:g}")
-            values = np.array([getattr(r, name) for r in mine])
-            wrinkled = np.array([r.state == "wrinkled" for r in mine])
-            ax.plot(v[wrinkled], values[wrinkled], "o", color=colour, ms=5,
-                    label=f"FE wrinkled, f = {f:g}")
-            ax.plot(v[~wrinkled], values[~wrinkled], "o", mfc="none", color=colour, ms=5,
-                    label=f"FE taut, f = {f:g}")
-            for x in change:
-                ax.axvline(x, color=colour, ls=":", lw=1)
-    for ax, name, what in (
-        (axes[0], "F1", "along the shear (x)"), (axes[1], "F2", "along the stretch (y)")
-    ):
-        ax.set_xlabel("stretching distance v (length units, L = 1)")
-        ax.set_ylabel(f"{name}: top-edge force {what} (force units)")
-        ax.grid(True, alpha=0.3)
-    axes[0].set_title(f"Shear force, gamma = {shear:g} held (cf. paper Fig. 6)")
-    axes[1].set_title("Stretching force (cf. paper Fig. 7)")
-    axes[1].legend(fontsize=7, ncol=3, loc="upper left")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+def colour_cycle() -> list[str]:
+    """The colours of matplotlib's current property cycle (rcParams "axes.prop_cycle")."""
+    try:
+        from matplotlib import rcParams
+    except ImportError:  # pragma: no cover - depends on the installation
+        raise ImportError(_NO_MATPLOTLIB) from None
+    return list(rcParams["axes.prop_cycle"].by_key()["color"])
 
 
 STATE_COLOURS = {"taut": "#3a78b5", "wrinkled": "#f5a623", "slack": "#cfcfcf"}
@@ -112,7 +97,10 @@ def _view_axes(x: np.ndarray) -> tuple[int, int]:
 
 
 def _tension_lines(
-    x: np.ndarray, triangles: np.ndarray, tension: np.ndarray, axes: tuple[int, int],
+    x: np.ndarray,
+    triangles: np.ndarray,
+    tension: np.ndarray,
+    axes: tuple[int, int],
     lines_across: int = 45,
 ) -> tuple[np.ndarray, bool]:
     """Tension-field line segments (k, 2, 2) in the view plane ``axes`` through the centroids
@@ -173,13 +161,14 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
     if not summary["converged"]:
         where += " (" + _stop_note(summary["message"]) + ")"
     where += f"\ndeformed membrane {view.name}"
-    plt = _pyplot()
     paths = [
-        _plot_states(plt, view, cell, where, out_dir / "state.png"),
-        _plot_major_stress(plt, view, cell, where, _unit(units, "stress"),
-                           out_dir / "principal_stress.png"),
-        _plot_load_displacement(plt, summary, out_dir / HISTORY, _unit(units, "length"),
-                                out_dir / "load_displacement.png"),
+        _plot_states(view, cell, where, out_dir / "state.png"),
+        _plot_major_stress(
+            view, cell, where, _unit(units, "stress"), out_dir / "principal_stress.png"
+        ),
+        _plot_load_displacement(
+            summary, out_dir / HISTORY, _unit(units, "length"), out_dir / "load_displacement.png"
+        ),
     ]
     return paths
 
@@ -196,13 +185,13 @@ class _View:
         a, b = (AXIS_NAMES[i] for i in self.axes)
         self.name = f"projected on the {a}{b}-plane (seen along {AXIS_NAMES[3 - sum(self.axes)]})"
 
-    def figure(self, plt, width: float = 7.5):
+    def figure(self, width: float = 7.5) -> tuple[Figure, Axes]:
         """A figure with one axes sized to the projected membrane, equal aspect, labelled."""
         xy = self.xy
         span = np.ptp(xy, axis=0)
         aspect = float(np.clip(span[1] / span[0], 0.25, 2.0)) if span[0] > 0 else 1.0
-        fig, ax = plt.subplots(figsize=(width, 1.3 + (width - 2.4) * aspect),
-                               layout="constrained")
+        fig = new_figure(figsize=(width, 1.3 + (width - 2.4) * aspect), layout="constrained")
+        ax = fig.subplots()
         ax.set_aspect("equal")
         ax.set_xlabel(_with_unit(AXIS_NAMES[self.axes[0]], self.length_unit))
         ax.set_ylabel(_with_unit(AXIS_NAMES[self.axes[1]], self.length_unit))
@@ -212,22 +201,27 @@ class _View:
         return fig, ax
 
 
-def _plot_states(plt, view: _View, cell: dict, where: str, path: Path) -> Path:
+def _plot_states(view: _View, cell: dict, where: str, path: Path) -> Path:
     """Elements coloured taut / wrinkled / slack, tension-field lines in the wrinkled ones."""
+    from matplotlib.artist import Artist
     from matplotlib.collections import LineCollection, PolyCollection
     from matplotlib.colors import to_rgba_array
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    fig, ax = view.figure(plt, width=8.5)
+    fig, ax = view.figure(width=8.5)
     state = cell["state"].astype(int)
     colours = to_rgba_array(list(STATE_COLOURS.values()))
-    ax.add_collection(PolyCollection(
-        view.xy[view.triangles], facecolors=colours[np.clip(state, 0, 2)],
-        edgecolors="face" if view.fine else "white", linewidths=0.2 if view.fine else 0.6,
-    ))
+    ax.add_collection(
+        PolyCollection(
+            view.xy[view.triangles],
+            facecolors=colours[np.clip(state, 0, 2)],
+            edgecolors="face" if view.fine else "white",
+            linewidths=0.2 if view.fine else 0.6,
+        )
+    )
     wrinkled = np.flatnonzero(state == list(STATE_COLOURS).index("wrinkled"))
-    handles = [
+    handles: list[Artist] = [
         Patch(facecolor=colour, edgecolor="0.4", label=f"{name} ({np.count_nonzero(state == k)})")
         for k, (name, colour) in enumerate(STATE_COLOURS.items())
     ]
@@ -235,64 +229,95 @@ def _plot_states(plt, view: _View, cell: dict, where: str, path: Path) -> Path:
         segments, sampled = _tension_lines(
             view.x, view.triangles[wrinkled], cell["tension_direction"][wrinkled], view.axes
         )
-        ax.add_collection(LineCollection(
-            segments, colors="#202020", linewidths=0.8 if sampled else 1.2, capstyle="round",
-        ))
-        handles.append(Line2D([], [], color="#202020", lw=1.2,
-                              label="tension lines" + (",\nsampled" if sampled else "")))
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0),
-              borderaxespad=0.0, title="elements")
+        ax.add_collection(
+            LineCollection(
+                list(segments),
+                colors="#202020",
+                linewidths=0.8 if sampled else 1.2,
+                capstyle="round",
+            )
+        )
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color="#202020",
+                lw=1.2,
+                label="tension lines" + (",\nsampled" if sampled else ""),
+            )
+        )
+    ax.legend(
+        handles=handles,
+        loc="upper left",
+        bbox_to_anchor=(1.01, 1.0),
+        borderaxespad=0.0,
+        title="elements",
+    )
     ax.set_title(f"Taut, wrinkled and slack elements\n{where}", fontsize=10)
     fig.savefig(path, dpi=150)
-    plt.close(fig)
     return path
 
 
-def _plot_major_stress(plt, view: _View, cell: dict, where: str, unit: str, path: Path) -> Path:
+def _plot_major_stress(view: _View, cell: dict, where: str, unit: str, path: Path) -> Path:
     """Map of the major principal stress; a concentration above 1.5 times the 98th
     percentile is clipped so that it does not wash out the rest (said in the title)."""
-    fig, ax = view.figure(plt)
+    fig, ax = view.figure()
     major = cell["principal_stress"][:, 1]
     top = float(np.percentile(major, 98))
     clipped = major.max() > 1.5 * top > 0
     image = ax.tripcolor(
-        view.xy[:, 0], view.xy[:, 1], view.triangles, facecolors=major, cmap="viridis",
-        vmin=min(0.0, float(major.min())), vmax=top if clipped else float(major.max()),
-        edgecolors="face" if view.fine else "white", linewidth=0.2 if view.fine else 0.4,
+        view.xy[:, 0],
+        view.xy[:, 1],
+        view.triangles,
+        facecolors=major,
+        cmap="viridis",
+        vmin=min(0.0, float(major.min())),
+        vmax=top if clipped else float(major.max()),
+        edgecolors="face" if view.fine else "white",
+        linewidth=0.2 if view.fine else 0.4,
     )
     bar = fig.colorbar(image, ax=ax, shrink=0.9, extend="max" if clipped else "neither")
     bar.set_label(_with_unit("major principal stress resultant", unit))
     note = ""
     if clipped:
-        note = (f"\ncolours clipped at the 98th percentile, "
-                f"maximum {major.max():.3g}{' ' + unit if unit else ''}")
+        note = (
+            f"\ncolours clipped at the 98th percentile, "
+            f"maximum {major.max():.3g}{' ' + unit if unit else ''}"
+        )
     ax.set_title(
         f"Major principal Cauchy stress resultant (force per current length)\n{where}{note}",
         fontsize=10,
     )
     fig.savefig(path, dpi=150)
-    plt.close(fig)
     return path
 
 
-def _plot_load_displacement(plt, summary: dict, history_path: Path, length_unit: str,
-                            path: Path) -> Path:
+def _plot_load_displacement(
+    summary: dict, history_path: Path, length_unit: str, path: Path
+) -> Path:
     """Probe displacements (or the largest displacement) against the load factor."""
     header, history = _read_history(history_path)
     load = history[:, header.index("load_factor")]
     probes = [name[:-3] for name in header if name.endswith("_ux")]
     if probes:
-        fig, (ax_magnitude, ax_parts) = plt.subplots(1, 2, figsize=(11, 4.5),
-                                                     layout="constrained")
-        cycle = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+        fig = new_figure(figsize=(11, 4.5), layout="constrained")
+        ax_magnitude, ax_parts = fig.subplots(1, 2)
+        cycle = colour_cycle()
         for k, probe in enumerate(probes):
             colour = cycle[k % len(cycle)]
             u = history[:, [header.index(f"{probe}_u{c}") for c in AXIS_NAMES]]
-            ax_magnitude.plot(load, np.linalg.norm(u, axis=1), "o-", color=colour, ms=4,
-                              label=probe)
+            ax_magnitude.plot(
+                load, np.linalg.norm(u, axis=1), "o-", color=colour, ms=4, label=probe
+            )
             for c, style in zip(range(3), ("-", "--", ":")):
-                ax_parts.plot(load, u[:, c], style, color=colour, marker=".",
-                              label=f"{probe}: u{AXIS_NAMES[c]}")
+                ax_parts.plot(
+                    load,
+                    u[:, c],
+                    style,
+                    color=colour,
+                    marker=".",
+                    label=f"{probe}: u{AXIS_NAMES[c]}",
+                )
         ax_magnitude.set_ylabel(_with_unit("|u|, mean over the probe's nodes", length_unit))
         ax_magnitude.set_title("Probe displacement magnitude")
         ax_parts.set_ylabel(_with_unit("u, mean over the probe's nodes", length_unit))
@@ -300,11 +325,16 @@ def _plot_load_displacement(plt, summary: dict, history_path: Path, length_unit:
         ax_parts.axhline(0.0, color="0.6", lw=0.6)
         for ax in (ax_magnitude, ax_parts):
             ax.legend(fontsize=8, ncol=2 if len(probes) > 3 else 1)
-        panels = (ax_magnitude, ax_parts)
+        panels: tuple[Axes, ...] = (ax_magnitude, ax_parts)
     else:
-        fig, ax = plt.subplots(figsize=(6.5, 4.5), layout="constrained")
-        ax.plot([s["load_factor"] for s in summary["steps"]],
-                [s["max_displacement"] for s in summary["steps"]], "o-", ms=4)
+        fig = new_figure(figsize=(6.5, 4.5), layout="constrained")
+        ax = fig.subplots()
+        ax.plot(
+            [s["load_factor"] for s in summary["steps"]],
+            [s["max_displacement"] for s in summary["steps"]],
+            "o-",
+            ms=4,
+        )
         ax.set_ylabel(_with_unit("largest nodal displacement", length_unit))
         ax.set_title("Largest displacement")
         panels = (ax,)
@@ -316,28 +346,29 @@ def _plot_load_displacement(plt, summary: dict, history_path: Path, length_unit:
     if not summary["converged"]:
         fig.suptitle(_stop_note(summary["message"], 120), fontsize=9, color="firebrick")
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return path
 
 
-def plot_state_map(model, u: np.ndarray, path: Path, title: str, length_unit: str = "") -> Path:
+def plot_state_map(
+    model: Model, u: np.ndarray, path: str | os.PathLike, title: str, length_unit: str = ""
+) -> Path:
     """``state.png``'s picture for a model in memory: taut / wrinkled / slack elements of
     ``model`` at displacements u (n_dofs,) with tension lines, written to ``path``."""
-    from wrinkle.results import element_report
+    from wrinkle.post import element_report
 
     report = element_report(model, u)
     x = model.mesh.nodes + np.asarray(u).reshape(-1, 3)
     view = _View(x, model.mesh.triangles, length_unit)
     cell = {"state": report.state, "tension_direction": report.tension_direction}
-    return _plot_states(_pyplot(), view, cell, f"{title}\ndeformed membrane {view.name}",
-                        Path(path))
+    return _plot_states(view, cell, f"{title}\ndeformed membrane {view.name}", Path(path))
 
 
-def plot_convergence(studies, path: Path, title: str) -> Path:
-    """Log-log errors against mesh size h for each ``Convergence`` in ``studies``, with a
-    slope triangle of the expected order; written to ``path``."""
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(6.0, 4.5), layout="constrained")
+def plot_convergence(studies, path: str | os.PathLike, title: str) -> Path:
+    """Log-log errors against mesh size h for each mesh-convergence study in ``studies``
+    (objects with ``quantity``, ``sizes``, ``errors``, ``expected_order`` and
+    ``observed_order``), with a guide line of the expected order; written to ``path``."""
+    fig = new_figure(figsize=(6.0, 4.5), layout="constrained")
+    ax = fig.subplots()
     for study in studies:
         h = np.asarray(study.sizes, float)
         e = np.abs(np.asarray(study.errors, float))
@@ -352,5 +383,4 @@ def plot_convergence(studies, path: Path, title: str) -> Path:
     ax.legend(fontsize=8)
     ax.set_title(title, fontsize=10)
     fig.savefig(path, dpi=150)
-    plt.close(fig)
     return Path(path)
