@@ -8,7 +8,7 @@ uniaxial tension, along the wrinkle crests. In the reference plane they are w (w
 C' = C + b w (x) w) and v, w turned by 90 degrees; in the current configuration
 n1 = F C^-1 w / |F C^-1 w| and n2 = F v / |F v|. The wrinkling strain is
 beta = sqrt(1 + b w.C^-1.w) - 1, from b = ((1 + beta)^2 - 1) |F^T n1|^2 and
-|F^T n1|^2 = 1 / (w.C^-1.w) (METHOD.md section 4).
+|F^T n1|^2 = 1 / (w.C^-1.w) (docs/method.md section 4).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Levenberg-regularised Newton method on the potential energy (the default solver).
 
-Each iteration solves (K + theta M) du = f - f* (METHOD.md section 7) with a sparse direct
+Each iteration solves (K + theta M) du = f - f* (docs/method.md section 7) with a sparse direct
 solver (``wrinkle.solvers.linear``) and accepts the step by the gain ratio of the potential
 energy Pi(u) = sum_e A0 w_relaxed - f.u (- p V for pressure) against its quadratic model,
 rho = [Pi(u) - Pi(u + du)] / [r.du - du.K.du / 2]. Where the decrease is at the level of

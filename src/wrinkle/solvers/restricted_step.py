@@ -2,7 +2,7 @@
 
 Each iteration minimises the linearised residual |f - f* - K du|^2 with a penalty on |du|:
 (2 K^T K + theta I) du = 2 K^T (f - f*). For symmetric K this is
-du = Re[(K - i mu I)^-1 (f - f*)] with mu^2 = theta / 2 (METHOD.md section 7), so one complex
+du = Re[(K - i mu I)^-1 (f - f*)] with mu^2 = theta / 2 (docs/method.md section 7), so one complex
 LU of a matrix with K's own sparsity replaces the much denser K^T K (with follower loads K is
 not symmetric and K^T K is formed). theta follows Fletcher's
 rules (Practical Methods of Optimization, vol. 1, 1980, section 5.2): the gain ratio
