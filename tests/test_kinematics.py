@@ -213,3 +213,61 @@ def test_fibre_perpendicular_to_element_is_named():
         reference_geometry(nodes, tri, fibre_direction=(0.0, 0.0, 0.0))
     # any direction with an in-plane component works
     reference_geometry(nodes, tri, fibre_direction=(1.0, 1.0, 0.0))
+
+
+def _flat_and_upright():
+    """Element 0 in the xy plane, element 1 in the yz plane: (6, 3) nodes, (2, 3) triangles."""
+    nodes = np.array(
+        [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ]
+    )
+    return nodes, np.array([[0, 1, 2], [3, 4, 5]])
+
+
+def test_isotropic_element_needs_no_projectable_fibre():
+    nodes, tri = _flat_and_upright()
+    # element 1 is perpendicular to x: fine if its material is isotropic
+    geometry = reference_geometry(
+        nodes, tri, fibre_direction=(1.0, 0.0, 0.0), isotropic=np.array([False, True])
+    )
+    frame = geometry.frame
+    assert np.allclose(frame[0], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # projectable: unchanged
+    assert np.allclose(np.einsum("nai,nbi->nab", frame, frame), np.eye(2), atol=1e-15)
+    assert np.allclose(np.einsum("nai,ni->na", frame, geometry.normal), 0.0, atol=1e-15)
+    assert np.allclose(frame[1, 0], [0.0, 1.0, 0.0])  # the axis least aligned with the normal
+    # a zero direction too, for isotropic elements
+    zero = reference_geometry(
+        nodes, tri, fibre_direction=(0.0, 0.0, 0.0), isotropic=np.array([True, True])
+    )
+    assert np.allclose(np.einsum("nai,nbi->nab", zero.frame, zero.frame), np.eye(2))
+    # an anisotropic element still raises, saying what to set, on one line
+    with pytest.raises(ValueError, match="perpendicular to element 1") as error:
+        reference_geometry(
+            nodes, tri, fibre_direction=(1.0, 0.0, 0.0), isotropic=np.array([True, False])
+        )
+    message = str(error.value)
+    assert "\n" not in message
+    assert "direction = [dx, dy, dz]" in message and "fibre_direction=" in message
+
+
+def test_material_frame_names_elements_by_their_numbers():
+    normal = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    with pytest.raises(ValueError, match="perpendicular to element 17 "):
+        material_frame(normal, (1.0, 0.0, 0.0), element_numbers=np.array([4, 17]))
+
+
+def test_fallback_frame_of_random_planes_is_orthonormal_and_in_plane():
+    rng = np.random.default_rng(5)
+    normal = rng.normal(size=(200, 3))
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    normal[:3] = np.eye(3)  # normals along the axes, where the first of equals is taken
+    frame = material_frame(normal, normal, isotropic=np.ones(200, dtype=bool), fibre_angle=0.3)
+    assert np.allclose(np.einsum("nai,nbi->nab", frame, frame), np.eye(2), atol=1e-14)
+    assert np.allclose(np.einsum("nai,ni->na", frame, normal), 0.0, atol=1e-14)
+    assert np.allclose(np.cross(frame[:, 0], frame[:, 1]), normal, atol=1e-14)  # right-handed

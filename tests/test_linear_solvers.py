@@ -200,6 +200,32 @@ def test_auto_and_unknown_names(monkeypatch):
     assert isinstance(make_linear_solver("auto", 10 * AUTO_PARDISO_DOFS), SuperLU)
 
 
+@pytest.mark.parametrize(
+    "name, module, install",
+    [
+        ("cholmod", "sksparse", r"libsuitesparse-dev\), then pip install scikit-sparse"),
+        ("amg", "pyamg", r"pip install pyamg"),
+    ],
+)
+def test_missing_backend_says_how_to_install_it(monkeypatch, name, module, install):
+    """Neither scikit-sparse nor pyamg is in an extra: the message must not send the user to
+    "wrinkle[fast]"."""
+    real_import = builtins.__import__
+
+    def without(imported, *args, **kwargs):
+        if imported.split(".")[0] == module:
+            raise ImportError(f"No module named '{module}'")
+        return real_import(imported, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", without)
+    with pytest.raises(ImportError, match=install) as error:
+        make_linear_solver(name)
+    message = str(error.value)
+    assert f"linear solver '{name}' needs " in message
+    assert ("scikit-sparse" if name == "cholmod" else "pyamg") in message
+    assert "wrinkle[" not in message and "\n" not in message
+
+
 @pytest.mark.parametrize("name", BACKENDS)
 @pytest.mark.parametrize("case", [AIRBAG, SHEAR_STRETCH], ids=["airbag", "shear_stretch"])
 def test_same_solution_with_every_backend(name, case):

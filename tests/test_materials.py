@@ -378,3 +378,104 @@ def test_bad_shape_of_C_raises(material_name: str) -> None:
         m.response(np.eye(2))
     with pytest.raises(ValueError, match="shape"):
         m.energy(np.zeros((4, 3, 3)))
+
+
+# -- is_isotropic: whether the fibre direction matters -------------------------------------
+
+E_ISO, NU_ISO = 2.0, 0.3
+
+
+@pytest.mark.parametrize(
+    "build, expected",
+    [
+        (lambda: StVenantKirchhoff.isotropic(E=E_ISO, nu=NU_ISO, thickness=D0), True),
+        # fibre five times stiffer than the cross direction
+        (
+            lambda: StVenantKirchhoff.transversely_isotropic(
+                E_L=5.0, E_T=1.0, nu_LT=0.3, nu_TT=0.3, G_LT=1.0 / 2.6, thickness=D0
+            ),
+            False,
+        ),
+        # E_L = E_T and G = E / (2 (1 + nu)): isotropic in the plane, whatever nu_TT
+        (
+            lambda: StVenantKirchhoff.transversely_isotropic(
+                E_L=E_ISO,
+                E_T=E_ISO,
+                nu_LT=NU_ISO,
+                nu_TT=NU_ISO,
+                G_LT=E_ISO / (2.0 * (1.0 + NU_ISO)),
+                thickness=D0,
+            ),
+            True,
+        ),
+        (
+            lambda: StVenantKirchhoff.transversely_isotropic(
+                E_L=E_ISO,
+                E_T=E_ISO,
+                nu_LT=NU_ISO,
+                nu_TT=0.1,
+                G_LT=E_ISO / (2.0 * (1.0 + NU_ISO)),
+                thickness=D0,
+            ),
+            True,
+        ),
+        # E_L = E_T but an inconsistent shear modulus: not isotropic
+        (
+            lambda: StVenantKirchhoff.transversely_isotropic(
+                E_L=E_ISO,
+                E_T=E_ISO,
+                nu_LT=NU_ISO,
+                nu_TT=NU_ISO,
+                G_LT=1.01 * E_ISO / (2.0 * (1.0 + NU_ISO)),
+                thickness=D0,
+            ),
+            False,
+        ),
+        (lambda: StVenantKirchhoff(random_spd_stiffness(), thickness=D0), False),
+        (lambda: NeoHookean(mu=1.5, thickness=D0), True),
+        (lambda: NeoHookean(mu=1.5, thickness=D0, lmbda=4.0), True),
+    ],
+    ids=[
+        "svk-isotropic",
+        "svk-transverse-f5",
+        "svk-transverse-f1",
+        "svk-transverse-f1-nuTT",
+        "svk-transverse-f1-bad-shear",
+        "svk-general",
+        "nh-incompressible",
+        "nh-compressible",
+    ],
+)
+def test_is_isotropic(build, expected: bool) -> None:
+    material = build()
+    assert material.is_isotropic is expected
+    assert isinstance(material, Material)
+
+
+def test_is_isotropic_is_read_only() -> None:
+    material = StVenantKirchhoff.isotropic(E=E_ISO, nu=NU_ISO, thickness=D0)
+    with pytest.raises(AttributeError):
+        material.is_isotropic = False  # type: ignore[misc]
+
+
+def test_isotropic_tangent_is_the_same_in_every_frame() -> None:
+    """What is_isotropic promises: rotating C by any angle rotates N and nothing else."""
+    from wrinkle.materials.base import rotate_voigt_tangent
+
+    m = StVenantKirchhoff.transversely_isotropic(
+        E_L=E_ISO,
+        E_T=E_ISO,
+        nu_LT=NU_ISO,
+        nu_TT=NU_ISO,
+        G_LT=E_ISO / (2.0 * (1.0 + NU_ISO)),
+        thickness=D0,
+    )
+    Q = m.plane_stress_stiffness
+    for angle in np.linspace(0.0, np.pi, 7):
+        assert np.allclose(rotate_voigt_tangent(Q, angle), Q, rtol=0, atol=1e-13 * Q.max())
+    # the rotation itself: a 90-degree turn swaps the axes of an orthotropic tangent
+    f5 = StVenantKirchhoff.transversely_isotropic(
+        E_L=5.0, E_T=1.0, nu_LT=0.3, nu_TT=0.3, G_LT=1.0 / 2.6, thickness=D0
+    )
+    turned = rotate_voigt_tangent(f5.plane_stress_stiffness, np.pi / 2)
+    assert np.allclose(turned[[1, 0, 2]][:, [1, 0, 2]], f5.plane_stress_stiffness)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -325,5 +326,181 @@ def test_sets_are_checked(node_sets, element_sets, message):
 
 def test_without_meshio_the_message_says_what_to_install(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "meshio", None)  # import meshio fails
-    with pytest.raises(ImportError, match=r'pip install "wrinkle\[io\]"'):
+    with pytest.raises(ImportError, match=r"meshio, which reads meshes and writes results, is missing: pip install meshio"):
         read_mesh(tmp_path / "plate.msh")
+
+
+# -- gmsh element data ($ElementData), read by element tag ----------------------------------
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "fibre_field"
+
+
+def example_fibre(mesh: Mesh) -> np.ndarray:
+    """The fibre field make_mesh.py writes, at the centroids of ``mesh``'s triangles, (n, 3)."""
+    width = 0.2  # make_mesh.WIDTH
+    x = mesh.nodes[mesh.triangles].mean(axis=1)[:, 0]
+    angle = 0.25 * np.pi * x / width
+    return np.column_stack([np.cos(angle), np.sin(angle), np.zeros_like(angle)])
+
+
+def test_gmsh_fibre_field_example_is_read_by_element_tag():
+    path = EXAMPLE / "sheet.msh"
+    assert path.stat().st_size < 200_000 and b"$ElementData" in path.read_bytes()
+    mesh = read_mesh(path)
+    assert set(mesh.cell_data) == {"fibre"}
+    assert mesh.cell_data["fibre"].shape == (mesh.n_elements, 3)
+    assert np.allclose(mesh.cell_data["fibre"], example_fibre(mesh), rtol=0, atol=1e-12)
+    # the boundary lines still make the node sets, the surface the element set
+    assert {"left", "right", "bottom", "top", "hole", "sheet"} <= set(mesh.node_sets)
+    assert mesh.element_sets["sheet"].size == mesh.n_elements
+    assert np.allclose(mesh.nodes[mesh.node_sets["left"], 0], 0.0)
+
+
+def test_gmsh_fibre_field_example_runs():
+    import wrinkle
+
+    case = wrinkle.read_case(EXAMPLE / "sheet.toml")
+    frame = case.model.discretise().geometry.frame
+    assert np.allclose(frame[:, 0], example_fibre(case.model.mesh), atol=1e-12)  # A1 = fibre
+    results = case.solve()
+    assert results.final.load_factor == pytest.approx(1.0)
+
+
+def _element_data_section(name: str, rows: list[tuple[int, list[float]]]) -> str:
+    lines = [
+        "$ElementData",
+        "1",
+        f'"{name}"',
+        "1",
+        "0.0",
+        "3",
+        "0",
+        str(len(rows[0][1])),
+        str(len(rows)),
+    ]
+    lines += [f"{tag} " + " ".join(repr(v) for v in values) for tag, values in rows]
+    return "\n".join(lines + ["$EndElementData"]) + "\n"
+
+
+def test_gmsh22_element_data_in_any_order_with_quads_and_lines(tmp_path):
+    path = write(
+        tmp_path,
+        "groups.msh",
+        GMSH_POINTS,
+        GMSH_CELLS,
+        cell_data={"gmsh:physical": GMSH_PHYSICAL, "gmsh:geometrical": GMSH_PHYSICAL},
+        field_data=GMSH_FIELDS,
+    )
+    # meshio numbers the elements 1..6 in order: vertex, two lines, two triangles, the quad
+    rows = [(6, [0.0, 1.0, 0.0]), (2, [9.0, 9.0, 9.0]), (5, [1.0, 1.0, 0.0]), (4, [1.0, 0.0, 0.0])]
+    scalar = [(4, [0.5]), (5, [0.25]), (6, [2.0])]
+    path.write_text(
+        path.read_text()
+        + _element_data_section("fibre", rows)
+        + _element_data_section("weight", scalar)
+    )
+    mesh = read_mesh(path)
+    assert mesh.n_elements == 4 and mesh.element_sets["patch"].tolist() == [2, 3]
+    assert mesh.cell_data["fibre"].tolist() == [[1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 1, 0]]
+    assert mesh.cell_data["weight"].tolist() == [0.5, 0.25, 2.0, 2.0]  # one component: (n,)
+
+
+def test_gmsh41_element_data_missing_triangle_is_named(tmp_path):
+    path = tmp_path / "square.msh"
+    # element 1 is the point, 2 the line, 3 and 4 the triangles
+    path.write_text(GMSH41 + _element_data_section("fibre", [(3, [1.0, 0.0, 0.0])]))
+    with pytest.raises(ValueError) as error:
+        read_mesh(path)
+    message = str(error.value)
+    assert message == (
+        f"mesh file {path}: gmsh element data 'fibre' has no value for the "
+        "triangle with element tag 4: give every triangle of the mesh a value"
+    )
+    path.write_text(
+        GMSH41
+        + _element_data_section(
+            "fibre", [(4, [0.0, 1.0, 0.0]), (2, [0.0, 0.0, 1.0]), (3, [1.0, 0.0, 0.0])]
+        )
+    )
+    assert read_mesh(path).cell_data["fibre"].tolist() == [[1, 0, 0], [0, 1, 0]]
+
+
+def test_gmsh_element_data_of_the_example_shuffled_and_partitioned(tmp_path):
+    """The values are found by element tag, not by position; a view split in two sections
+    of one time step (as gmsh writes partitions) is one field; a later step replaces it."""
+    text = (EXAMPLE / "sheet.msh").read_text()
+    head, rest = text.split("$ElementData\n")
+    body, tail = rest.split("$EndElementData\n")
+    lines = body.splitlines()
+    header, entries = lines[:9], lines[9:]
+    order = np.random.default_rng(1).permutation(len(entries))
+    shuffled = [entries[i] for i in order]
+    half = len(shuffled) // 2
+
+    def section(rows: list[str], step: int = 0) -> str:
+        # header: 1 string tag (the name), 1 real tag (the time), 4 integer tags (time step,
+        # components, entries, partition)
+        return (
+            "\n".join(
+                [
+                    "$ElementData",
+                    *header[:5],
+                    str(step),
+                    header[6],
+                    str(len(rows)),
+                    header[8],
+                    *rows,
+                    "$EndElementData",
+                ]
+            )
+            + "\n"
+        )
+
+    path = tmp_path / "sheet.msh"
+    path.write_text(head + section(shuffled[:half]) + section(shuffled[half:]) + tail)
+    mesh = read_mesh(path)
+    assert np.allclose(mesh.cell_data["fibre"], example_fibre(mesh), atol=1e-12)
+    turned = [" ".join([line.split()[0], "0.0", "1.0", "0.0"]) for line in entries]
+    path.write_text(head + section(shuffled) + section(turned, step=1) + tail)
+    assert np.all(read_mesh(path).cell_data["fibre"] == [0.0, 1.0, 0.0])
+    # a value missing: the message names the field and the element tag
+    missing = shuffled[0].split()[0]
+    path.write_text(head + section(shuffled[1:]) + tail)
+    with pytest.raises(
+        ValueError, match=f"'fibre' has no value for the triangle with element tag {missing}:"
+    ):
+        read_mesh(path)
+    # twice the same element
+    path.write_text(head + section(shuffled + shuffled[:1]) + tail)
+    with pytest.raises(ValueError, match=f"gives element tag {missing} more than one value"):
+        read_mesh(path)
+
+
+def test_gmsh_element_data_in_a_binary_file_says_save_as_ascii(tmp_path):
+    text = (EXAMPLE / "sheet.msh").read_text().replace("4.1 0 8", "4.1 1 8", 1)
+    path = tmp_path / "sheet.msh"
+    path.write_text(text)
+    with pytest.raises(ValueError) as error:
+        read_mesh(path)
+    assert str(error.value) == (
+        f"mesh file {path}: gmsh element data ($ElementData) is read from ASCII .msh files "
+        "only: save the mesh as ASCII (gmsh option Mesh.Binary = 0)"
+    )
+
+
+def test_case_reads_a_gmsh_fibre_field_by_name(tmp_path):
+    import wrinkle
+
+    path = tmp_path / "case.toml"
+    text = (EXAMPLE / "sheet.toml").read_text()
+    path.write_text(
+        text.replace('file = "sheet.msh"', f'file = "{EXAMPLE / "sheet.msh"}"').replace(
+            'direction = "fibre"', 'direction = "fibres"'
+        )
+    )
+    with pytest.raises(
+        wrinkle.case.CaseError,
+        match=r"\[material\]: 'direction' names cell "
+        r"data 'fibres'.*fibre \(\d+, 3\)",
+    ):
+        wrinkle.read_case(path)

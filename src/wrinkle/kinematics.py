@@ -1,6 +1,6 @@
 """Batched kinematics of the three-node constant-strain membrane triangle in 3-D space.
 
-Notation follows METHOD.md section 2 (Roddeman et al. 1987, Part II, section 2): reference
+Notation follows docs/method.md section 2 (Roddeman et al. 1987, Part II, section 2): reference
 positions X_k, current positions x_k, k = 1, 2, 3; everything is constant over an element.
 Each element carries an orthonormal material frame (A1, A2) of its reference plane, A1 along
 the material's fibre direction, and all in-plane tensors (F, C, stress) are written in it.
@@ -11,6 +11,20 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+__all__ = [
+    "FIBRE_DIRECTION_HINT",
+    "ReferenceGeometry",
+    "cross",
+    "current_normal",
+    "deformation_gradient",
+    "element_coordinates",
+    "in_plane_axis",
+    "material_frame",
+    "reference_geometry",
+    "reference_normals",
+    "right_cauchy_green",
+]
 
 # d(psi_k)/d(xi_alpha) for psi_1 = xi_1, psi_2 = xi_2, psi_3 = 1 - xi_1 - xi_2: shape (3, 2)
 _SHAPE_DERIVATIVES = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, -1.0]])
@@ -61,25 +75,59 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     )
 
 
+#: What to set when a fibre direction cannot be projected onto an anisotropic element.
+FIBRE_DIRECTION_HINT = (
+    "set the material's fibre direction so that it has a component in every element's plane "
+    "(case file: [material] direction = [dx, dy, dz] or the name of a per-element cell-data "
+    "field; Python: fibre_direction=...)"
+)
+
+
+def in_plane_axis(normal: np.ndarray) -> np.ndarray:
+    """A unit in-plane direction of each element that depends on its normal only, (n, 3): the
+    coordinate axis least aligned with the normal (the first of equals), projected onto the
+    plane (its projection has length >= sqrt(2/3)). Elements of one flat face share it."""
+    axis = np.eye(3)[np.argmin(np.abs(normal), axis=1)]
+    projected = axis - np.sum(axis * normal, axis=1)[:, None] * normal
+    return projected / np.linalg.norm(projected, axis=1)[:, None]
+
+
 def material_frame(
-    normal: np.ndarray, fibre_direction: np.ndarray, fibre_angle: np.ndarray | float = 0.0
+    normal: np.ndarray,
+    fibre_direction: np.ndarray | tuple,
+    fibre_angle: np.ndarray | float = 0.0,
+    isotropic: np.ndarray | None = None,
+    element_numbers: np.ndarray | None = None,
 ) -> np.ndarray:
     """Orthonormal in-plane frame (A1, A2) of each element, (n, 2, 3).
 
     A1 is ``fibre_direction`` ((3,) or (n, 3)) projected onto the element plane and then turned
     by ``fibre_angle`` (radians, scalar or (n,)) about the normal; A2 = N x A1.
-    Raises ValueError naming the first element whose plane is perpendicular to the direction.
+    isotropic: (n,) bool, elements whose material is isotropic (``Material.is_isotropic``):
+    where the direction cannot be projected there (perpendicular to the plane, or zero), A1 is
+    ``in_plane_axis`` instead, as the frame changes no result of an isotropic law.
+    Raises ValueError naming the first other element whose plane is perpendicular to the
+    direction, numbered by ``element_numbers`` ((n,), default 0 .. n - 1).
     """
     direction = np.broadcast_to(np.asarray(fibre_direction, dtype=float), normal.shape)
     projected = direction - np.sum(direction * normal, axis=1)[:, None] * normal
     length = np.linalg.norm(projected, axis=1)
     scale = np.linalg.norm(direction, axis=1)
     bad = ~(length > 1e-8 * np.maximum(scale, 1e-300))
+    if isotropic is not None and np.any(bad):
+        replace = bad & np.asarray(isotropic, dtype=bool)
+        if np.any(replace):
+            projected = projected.copy()
+            projected[replace] = in_plane_axis(normal[replace])
+            length = np.where(replace, 1.0, length)
+            bad = bad & ~replace
     if np.any(bad):
-        element = int(np.flatnonzero(bad)[0])
+        first = int(np.flatnonzero(bad)[0])
+        element = first if element_numbers is None else int(element_numbers[first])
         raise ValueError(
-            f"fibre direction {direction[element].tolist()} is perpendicular to element "
-            f"{element} (or zero): it cannot be projected onto the element plane"
+            f"fibre direction {direction[first].tolist()} is perpendicular to element "
+            f"{element} (or zero): it cannot be projected onto the element plane; "
+            + FIBRE_DIRECTION_HINT
         )
     a1 = projected / length[:, None]
     a2 = cross(normal, a1)
@@ -90,22 +138,37 @@ def material_frame(
     return np.stack([a1, a2], axis=1)
 
 
-def reference_geometry(
-    nodes: np.ndarray,
-    triangles: np.ndarray,
-    fibre_direction: np.ndarray | tuple = (1.0, 0.0, 0.0),
-    fibre_angle: np.ndarray | float = 0.0,
-) -> ReferenceGeometry:
-    """Areas, normals, material frames and shape-function gradients of all triangles.
-
-    nodes: (n_nodes, 3) reference coordinates; triangles: (n, 3) node indices.
-    Raises ValueError naming the first degenerate (zero-area) element.
-    """
+def reference_normals(
+    nodes: np.ndarray, triangles: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Edges G1 = X1 - X3, G2 = X2 - X3 (each (n, 3)), twice the area |G1 x G2| (n,) and the
+    unit normal (n, 3) of each triangle; the normal is NaN where the area is zero (see
+    ``reference_geometry`` for the check)."""
     X = element_coordinates(np.asarray(nodes, dtype=float), np.asarray(triangles))
     G1 = X[:, 0] - X[:, 2]
     G2 = X[:, 1] - X[:, 2]
     G1xG2 = cross(G1, G2)
     twice_area = np.linalg.norm(G1xG2, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        normal = G1xG2 / twice_area[:, None]
+    return G1, G2, twice_area, normal
+
+
+def reference_geometry(
+    nodes: np.ndarray,
+    triangles: np.ndarray,
+    fibre_direction: np.ndarray | tuple = (1.0, 0.0, 0.0),
+    fibre_angle: np.ndarray | float = 0.0,
+    isotropic: np.ndarray | None = None,
+) -> ReferenceGeometry:
+    """Areas, normals, material frames and shape-function gradients of all triangles.
+
+    nodes: (n_nodes, 3) reference coordinates; triangles: (n, 3) node indices; fibre_direction,
+    fibre_angle and isotropic ((n,) bool) as in ``material_frame``.
+    Raises ValueError naming the first degenerate (zero-area) element, or the first
+    anisotropic element the fibre direction cannot be projected onto.
+    """
+    G1, G2, twice_area, normal = reference_normals(nodes, triangles)
     size = np.maximum(np.linalg.norm(G1, axis=1), np.linalg.norm(G2, axis=1))
     degenerate = ~(twice_area > 1e-12 * size**2)
     if np.any(degenerate):
@@ -114,8 +177,7 @@ def reference_geometry(
             f"element {element} (nodes {np.asarray(triangles)[element].tolist()}) "
             "has zero area"
         )
-    normal = G1xG2 / twice_area[:, None]
-    frame = material_frame(normal, fibre_direction, fibre_angle)
+    frame = material_frame(normal, fibre_direction, fibre_angle, isotropic)
     # in-plane coordinates of G1, G2: M[:, a, alpha] = G_alpha . A_a
     M = np.einsum("nai,nki->nak", frame, np.stack([G1, G2], axis=1))
     # d psi_k / d P_a = d psi_k / d xi_alpha (M^-1)_alpha a
@@ -126,7 +188,7 @@ def reference_geometry(
 def deformation_gradient(x_elements: np.ndarray, shape_gradient: np.ndarray) -> np.ndarray:
     """In-plane deformation gradient F = sum_k x_k (x) grad psi_k, (n, 3, 2).
 
-    Column a of F is the current image of the material axis A_a (METHOD.md section 2,
+    Column a of F is the current image of the material axis A_a (docs/method.md section 2,
     F_m = g_alpha (x) Gamma^alpha written in the material frame).
     x_elements: (n, 3 nodes, 3) current node coordinates; shape_gradient: (n, 3, 2).
 

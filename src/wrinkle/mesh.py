@@ -1,16 +1,30 @@
 """Triangle meshes of membranes: nodes, triangles, named sets, checks, generators and
-reading mesh files through meshio (the optional extra ``wrinkle[io]``)."""
+reading mesh files through meshio."""
 
 from __future__ import annotations
 
 import contextlib
 import io
 import math
+import re
+import tempfile
 from dataclasses import dataclass, field
 from numbers import Integral, Real
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
+
+__all__ = ["require_meshio", 
+    "Mesh",
+    "annulus",
+    "cylinder",
+    "disk",
+    "mesh_size",
+    "read_mesh",
+    "rectangle",
+    "sphere",
+]
 
 
 @dataclass
@@ -378,15 +392,262 @@ def _zero_area_element(nodes: np.ndarray, triangles: np.ndarray) -> int | None:
     return int(degenerate[0]) if degenerate.size else None
 
 
+# -- gmsh element data, read by element tag ------------------------------------------------
+# meshio reads a gmsh $ElementData section as a list of values for every saved cell in order
+# (lines and points included) and fails when it holds values for the triangles only; gmsh
+# writes it as (element tag, values) pairs. So wrinkle reads these sections itself, and the
+# $Elements section for the tags of the triangles, and gives meshio the file without them.
+
+_SECTION = re.compile(rb"^\$(\w+)[ \t]*\r?$", re.MULTILINE)
+_GMSH_SURFACE_TYPES = {2: "triangle", 3: "quad"}  # gmsh element type -> meshio cell type
+_GMSH_MISMATCH = (
+    "cannot match the gmsh element data to the elements: the cells meshio "
+    "reads are not those of the file's $Elements section"
+)
+
+
+@dataclass
+class _GmshElementData:
+    """What wrinkle reads of an ASCII gmsh file itself.
+
+    surface_tags: (k,) element tags of the triangle and quad elements, in file order;
+    surface_types: (k,) their gmsh types (2 triangle, 3 quad); surface_nodes: (k, 4) their
+    node tags (-1 after a triangle's three); fields: name -> ((m,) element tags, (m, c)
+    values) of each $ElementData view.
+    """
+
+    surface_tags: np.ndarray
+    surface_types: np.ndarray
+    surface_nodes: np.ndarray
+    fields: dict[str, tuple[np.ndarray, np.ndarray]]
+
+
+def _gmsh_sections(content: bytes) -> list[tuple[str, int, int, int]]:
+    """(name, start of the header line, start of the body, end of the $End line) of each
+    section of a gmsh file, up to the first section without its $End line (meshio then says
+    what is wrong with the file)."""
+    sections = []
+    position = 0
+    while (match := _SECTION.search(content, position)) is not None:
+        name = match.group(1).decode()
+        end = re.compile(rb"^\$End" + re.escape(match.group(1)) + rb"[ \t]*\r?$", re.MULTILINE)
+        closing = end.search(content, match.end())
+        if closing is None:
+            break
+        sections.append((name, match.start(), match.end(), closing.end()))
+        position = closing.end()
+    return sections
+
+
+def _section_lines(content: bytes, body: int, end: int) -> list[str]:
+    """The lines of a section between its header and its $End line (see _gmsh_sections)."""
+    return content[body:end].decode().splitlines()[1:-1]
+
+
+def _gmsh_surface_elements(lines: list[str], version: str) -> tuple[np.ndarray, ...]:
+    """Element tags (k,), gmsh types (k,) and node tags (k, 4) of the triangles and quads of
+    an ASCII $Elements section (its lines without the header), in file order."""
+    tags, types, nodes = [], [], []
+
+    def keep(block_type: int, rows: np.ndarray) -> None:
+        if block_type in _GMSH_SURFACE_TYPES and rows.size:
+            tags.append(rows[:, 0])
+            types.append(np.full(rows.shape[0], block_type))
+            corners = np.full((rows.shape[0], 4), -1, dtype=np.int64)
+            corners[:, : rows.shape[1] - 1] = rows[:, 1:]
+            nodes.append(corners)
+
+    if version.startswith("2"):  # tag type n_tags <tags> nodes..., one element a line
+        for line in lines[1:]:
+            parts = line.split()
+            if len(parts) < 3:
+                continue
+            element_type, n_tags = int(parts[1]), int(parts[2])
+            if element_type in _GMSH_SURFACE_TYPES:
+                keep(
+                    element_type,
+                    np.array([[int(parts[0])] + [int(p) for p in parts[3 + n_tags :]]]),
+                )
+    else:  # 4.x: blocks "dim entity type count" (4.0: "entity dim type count"), then lines
+        n_blocks = int(lines[0].split()[0])
+        row = 1
+        for _ in range(n_blocks):
+            header = lines[row].split()
+            block_type, count = int(header[2]), int(header[3])
+            block = lines[row + 1 : row + 1 + count]
+            row += 1 + count
+            if block_type in _GMSH_SURFACE_TYPES and count:
+                keep(
+                    block_type, np.array(" ".join(block).split(), dtype=np.int64).reshape(count, -1)
+                )
+    if not tags:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, np.zeros((0, 4), dtype=np.int64)
+    return np.concatenate(tags), np.concatenate(types), np.concatenate(nodes)
+
+
+def _gmsh_element_data(lines: list[str], index: int) -> tuple[str, int, np.ndarray, np.ndarray]:
+    """Name, time step, element tags (m,) and values (m, c) of an ASCII $ElementData section
+    (its lines without the header): string tags (the first is the name), real tags (the
+    time), integer tags (time step, number of components, number of entries, ...), then one
+    line "element-tag value..." per entry. ``index`` names an unnamed view."""
+    row = 0
+    n_strings = int(lines[row])
+    strings = [line.strip().strip('"') for line in lines[row + 1 : row + 1 + n_strings]]
+    row += 1 + n_strings
+    n_reals = int(lines[row])
+    row += 1 + n_reals
+    n_integers = int(lines[row])
+    integers = [int(line) for line in lines[row + 1 : row + 1 + n_integers]]
+    row += 1 + n_integers
+    name = strings[0] if strings and strings[0] else f"ElementData {index}"
+    if len(integers) < 3:
+        raise ValueError(
+            f"gmsh element data {name!r}: expected 3 integer tags (time step, "
+            f"components, entries), got {len(integers)}"
+        )
+    step, n_components, n_entries = integers[:3]
+    entries = np.array(" ".join(lines[row : row + n_entries]).split())
+    if entries.size != n_entries * (1 + n_components):
+        raise ValueError(
+            f"gmsh element data {name!r}: expected {n_entries} lines of an "
+            f"element tag and {n_components} values"
+        )
+    entries = entries.reshape(n_entries, 1 + n_components)
+    return name, step, entries[:, 0].astype(np.int64), entries[:, 1:].astype(float)
+
+
+def _read_gmsh_element_data(content: bytes) -> tuple[_GmshElementData | None, bytes]:
+    """The element data of a gmsh file and the file without its $ElementData sections (for
+    meshio); (None, content) if it has none. ValueError for a binary file with element data."""
+    sections = _gmsh_sections(content)
+    if not any(name == "ElementData" for name, *_ in sections):
+        return None, content
+    where = {name: (body, end) for name, _, body, end in sections}
+    if "MeshFormat" not in where:
+        raise ValueError("gmsh file without a $MeshFormat section")
+    header = (
+        content[slice(*where["MeshFormat"])].decode(errors="replace").splitlines() + ["", ""]
+    )[1].split()
+    if len(header) < 2 or header[1] != "0":  # file-type 0 ASCII, 1 binary
+        raise ValueError(
+            "gmsh element data ($ElementData) is read from ASCII .msh files "
+            "only: save the mesh as ASCII (gmsh option Mesh.Binary = 0)"
+        )
+    if "Elements" not in where:
+        raise ValueError("gmsh file without an $Elements section")
+    tags, types, nodes = _gmsh_surface_elements(
+        _section_lines(content, *where["Elements"]), header[0]
+    )
+    fields: dict[str, tuple[int, list[np.ndarray], list[np.ndarray]]] = {}
+    kept, position = [], 0
+    for index, (name, start, body, end) in enumerate(sections):
+        if name != "ElementData":
+            continue
+        kept.append(content[position:start])
+        position = end
+        lines = _section_lines(content, body, end)
+        field, step, field_tags, values = _gmsh_element_data(lines, index)
+        if field in fields and fields[field][0] == step:  # one section per partition
+            fields[field][1].append(field_tags)
+            fields[field][2].append(values)
+        else:  # of several time steps the last in the file is kept
+            fields[field] = (step, [field_tags], [values])
+    kept.append(content[position:])
+    data = {name: (np.concatenate(t), np.concatenate(v)) for name, (_, t, v) in fields.items()}
+    return _GmshElementData(tags, types, nodes, data), b"".join(kept)
+
+
+def _gmsh_cell_data(
+    gmsh: _GmshElementData, surface_blocks: list[tuple[str, np.ndarray]]
+) -> dict[str, np.ndarray]:
+    """The element data of ``gmsh`` per wrinkle element, (n_elements, c) ((n_elements,) for
+    one component), a split quad giving both triangles its value. surface_blocks: meshio's
+    triangle and quad blocks (cell type, (k, 3 or 4) point indices) in wrinkle's order.
+
+    meshio keeps gmsh's element order (it drops the tags): the k-th surface cell of meshio is
+    the k-th of the file. That is checked, so that a reader that reorders gives an error, not
+    a wrong field: the cell types must agree and the node tags and meshio's point indices
+    must correspond one to one."""
+    types = np.concatenate(
+        [np.full(len(cells), 2 if kind == "triangle" else 3) for kind, cells in surface_blocks]
+    )
+    points = np.full((types.size, 4), -1, dtype=np.int64)  # meshio's, padded as surface_nodes
+    points[:, :3] = np.concatenate([np.asarray(cells)[:, :3] for _, cells in surface_blocks])
+    points[types == 3, 3] = np.concatenate(
+        [np.asarray(cells)[:, 3] for kind, cells in surface_blocks if kind == "quad"] + [[]]
+    )
+    if (
+        types.shape != gmsh.surface_types.shape
+        or np.any(types != gmsh.surface_types)
+        or np.any((points < 0) != (gmsh.surface_nodes < 0))
+    ):
+        raise ValueError(_GMSH_MISMATCH)
+    corner = points >= 0
+    pairs = np.unique(np.column_stack([gmsh.surface_nodes[corner], points[corner]]), axis=0)
+    if (
+        np.unique(pairs[:, 0]).size != pairs.shape[0]
+        or np.unique(pairs[:, 1]).size != pairs.shape[0]
+    ):
+        raise ValueError(_GMSH_MISMATCH)
+    per_cell = np.where(types == 2, 1, 2)
+    element_tags = np.repeat(gmsh.surface_tags, per_cell)
+    cell_data = {}
+    for name, (tags, values) in gmsh.fields.items():
+        order = np.argsort(tags, kind="stable")
+        sorted_tags = tags[order]
+        repeated = np.flatnonzero(sorted_tags[1:] == sorted_tags[:-1])
+        if repeated.size:
+            raise ValueError(
+                f"gmsh element data {name!r} gives element tag "
+                f"{sorted_tags[repeated[0]]} more than one value"
+            )
+        position = np.searchsorted(sorted_tags, element_tags)
+        found = position < tags.size
+        found[found] = sorted_tags[position[found]] == element_tags[found]
+        if not np.all(found):
+            first = int(np.flatnonzero(~found)[0])
+            kind = _GMSH_SURFACE_TYPES[int(np.repeat(types, per_cell)[first])]
+            raise ValueError(
+                f"gmsh element data {name!r} has no value for the {kind} with element tag "
+                f"{element_tags[first]}: give every triangle of the mesh a value"
+            )
+        field_values = values[order[position]]
+        cell_data[name] = field_values[:, 0] if field_values.shape[1] == 1 else field_values
+    return cell_data
+
+
+def require_meshio() -> ModuleType:
+    """The meshio module (imported when first needed: it takes a tenth of a second), or
+    ImportError saying how to install it."""
+    try:
+        import meshio
+    except ImportError:
+        raise ImportError(
+            "wrinkle: meshio, which reads meshes and writes results, is missing: "
+            "pip install meshio"
+        ) from None
+    return meshio
+
+
 def read_mesh(path: str | Path) -> Mesh:
     """Read a triangle mesh from any file meshio reads (gmsh .msh, .vtu, .inp, ...).
 
-    Needs meshio (``pip install "wrinkle[io]"``). Surface cells become elements: "triangle"
+    Surface cells become elements: "triangle"
     cells as they are, and every "quad" (nodes a, b, c, d) is split into the two triangles
     (a, b, c) and (a, c, d) along its diagonal a-c; quad k of a block becomes the two
     consecutive elements 2k, 2k + 1. Higher-order cells (triangle6, quad8, ...) and volume
     cells are refused: mesh with linear elements (in gmsh, element order 1). "line" and
     "vertex" cells only define named node groups. 2-D points get z = 0.
+
+    Per-element data: meshio's cell data of the surface cells becomes ``Mesh.cell_data``
+    (a split quad gives both triangles its value). gmsh ``$ElementData`` views (for example a
+    fibre direction per triangle, written by ``gmsh.view.addModelData(..., "ElementData",
+    ...)``) are read by wrinkle itself, by element tag, from ASCII .msh files (gmsh option
+    ``Mesh.Binary = 0``): ``cell_data[view name]`` is (n_elements, n_components), or
+    (n_elements,) for one component, in wrinkle's element order; every triangle and quad
+    needs a value, values of other elements (lines, points) are ignored; of several time
+    steps of a view the last in the file is kept.
 
     Named sets: a gmsh physical group (``field_data`` with ``cell_data["gmsh:physical"]``)
     becomes a node set holding all nodes of its cells (points, lines or surfaces) and, for a
@@ -400,22 +661,30 @@ def read_mesh(path: str | Path) -> Mesh:
     messages are the indices of the (split) triangles in file order, node numbers are the
     file's points counted from 0, both before unused nodes are dropped.
     """
-    try:
-        import meshio
-    except ImportError:
-        raise ImportError(
-            'reading mesh files needs meshio: pip install "wrinkle[io]"'
-        ) from None
+    meshio = require_meshio()
     path = Path(path)
     if not path.exists():
         raise ValueError(f"mesh file {path}: no such file")
     if not path.is_file():
         raise ValueError(f"mesh file {path}: not a file")
+    gmsh = None
+    if path.suffix.lower() == ".msh":
+        try:
+            gmsh, content = _read_gmsh_element_data(path.read_bytes())
+        except (ValueError, IndexError, UnicodeDecodeError) as error:
+            detail = str(error) if isinstance(error, ValueError) else "bad $ElementData"
+            raise ValueError(f"mesh file {path}: {detail}") from None
     # meshio prints its readers' errors and, when every reader fails, calls sys.exit(1)
     printed = io.StringIO()
     try:
         with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(printed):
-            data = meshio.read(path)
+            if gmsh is None:
+                data = meshio.read(path)
+            else:  # the file without its $ElementData sections
+                with tempfile.TemporaryDirectory() as folder:
+                    stripped = Path(folder) / path.name
+                    stripped.write_bytes(content)
+                    data = meshio.read(stripped, file_format="gmsh")
     except (Exception, SystemExit) as error:  # noqa: BLE001 -- readers raise many types
         if isinstance(error, Exception):
             lines = str(error).strip().splitlines()
@@ -429,13 +698,14 @@ def read_mesh(path: str | Path) -> Mesh:
             )
         raise ValueError(f"mesh file {path}: cannot read it ({reason})") from None
     try:
-        return _mesh_from_meshio(data)
+        return _mesh_from_meshio(data, gmsh)
     except ValueError as error:
         raise ValueError(f"mesh file {path}: {error}") from None
 
 
-def _mesh_from_meshio(data) -> Mesh:
-    """The wrinkle Mesh of a meshio.Mesh (see ``read_mesh``); ValueError without file name."""
+def _mesh_from_meshio(data, gmsh: _GmshElementData | None = None) -> Mesh:
+    """The wrinkle Mesh of a meshio.Mesh (see ``read_mesh``), with the element data of a gmsh
+    file read by ``_read_gmsh_element_data``; ValueError without file name."""
     points = np.asarray(data.points, dtype=float)
     if points.ndim != 2 or points.shape[1] not in (2, 3):
         raise ValueError(f"points must have 2 or 3 coordinates, got shape {points.shape}")
@@ -528,6 +798,8 @@ def _mesh_from_meshio(data) -> Mesh:
             parts.append(np.repeat(values, _SURFACE_CELLS[blocks[b][0]], axis=0))
         if parts and all(p.shape[1:] == parts[0].shape[1:] for p in parts):
             cell_data[name] = np.concatenate(parts)
+    if gmsh is not None:
+        cell_data.update(_gmsh_cell_data(gmsh, [blocks[b] for b in sorted(first_element)]))
 
     # checks in the file's numbering, so that the messages point into the file
     checked = Mesh(points, triangles)

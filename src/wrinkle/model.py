@@ -24,7 +24,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wrinkle.assembly import DOFS_PER_NODE, SparsityPattern
-from wrinkle.kinematics import ReferenceGeometry, reference_geometry
+from wrinkle.kinematics import (
+    ReferenceGeometry,
+    material_frame,
+    reference_geometry,
+    reference_normals,
+)
 from wrinkle.loads import boundary_edges, edge_dead_forces, edge_follower_forces
 from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh
@@ -156,13 +161,26 @@ class Model:
         fibre_angle: ArrayLike | None = None,
     ) -> None:
         """Give ``elements`` (indices, mask or element-set name; None = all) a material and,
-        optionally, their own fibre direction ((3,) or (k, 3)) and angle (radians)."""
+        optionally, their own fibre direction ((3,) or (k, 3)) and angle (radians).
+
+        An isotropic material (``is_isotropic``) needs no fibre direction. For an anisotropic
+        one the direction is checked here: ValueError naming the first element whose plane it
+        is perpendicular to (or if it is zero), and what to set."""
         chosen = self._element_indices(elements)
         wrinkling = material if isinstance(material, Wrinkling) else Wrinkling(material)
+        direction = self._fibre_direction[chosen]
+        if fibre_direction is not None:
+            direction = np.broadcast_to(np.asarray(fibre_direction, dtype=float),
+                                        direction.shape)
+        if not wrinkling.is_isotropic:
+            _, _, _, normal = reference_normals(self.mesh.nodes, self.mesh.triangles[chosen])
+            flat = ~np.all(np.isfinite(normal), axis=1)  # zero area: reported by the geometry
+            material_frame(np.where(flat[:, None], 0.0, normal), direction, isotropic=flat,
+                           element_numbers=chosen)
         self._materials.append(wrinkling)
         self._material_of_element[chosen] = len(self._materials) - 1
         if fibre_direction is not None:
-            self._fibre_direction[chosen] = fibre_direction
+            self._fibre_direction[chosen] = direction
         if fibre_angle is not None:
             self._fibre_angle[chosen] = fibre_angle
         self._geometry = None
@@ -180,8 +198,10 @@ class Model:
                 f"{missing.size} element(s) have no material, first: element {missing[0]}"
             )
         if self._geometry is None:
+            isotropic = np.array([m.is_isotropic for m in self._materials], dtype=bool)
             self._geometry = reference_geometry(
-                self.mesh.nodes, self.mesh.triangles, self._fibre_direction, self._fibre_angle
+                self.mesh.nodes, self.mesh.triangles, self._fibre_direction, self._fibre_angle,
+                isotropic=isotropic[self._material_of_element],
             )
         return self._geometry
 

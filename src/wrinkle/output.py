@@ -27,7 +27,6 @@ says where the analysis stopped ("converged": false, "message": "running") until
 
 Units are consistent units; ``units`` (e.g. {"length": "m", "force": "N"}) is recorded in the
 summary for the pictures (``wrinkle.plot.plot_results``) and the reader.
-meshio is an optional dependency: pip install "wrinkle[io]".
 """
 
 from __future__ import annotations
@@ -45,26 +44,16 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from wrinkle.mesh import require_meshio
 from wrinkle.post import element_report, support_reactions
 from wrinkle.wrinkling import STATE_NAMES
 
-__all__ = ["COLLECTION", "HISTORY", "STEP_FILE", "SUMMARY", "ResultWriter", "atomic_write", "require_meshio", "save_results", "step_file_name"]
+__all__ = ["COLLECTION", "HISTORY", "STEP_FILE", "SUMMARY", "ResultWriter", "atomic_write", "save_results", "step_file_name"]
 
 SUMMARY = "summary.json"
 HISTORY = "history.csv"
 COLLECTION = "results.pvd"
 STEP_FILE = re.compile(r"step_\d{4,}\.vtu")
-
-
-def require_meshio():
-    """The meshio module, or ImportError saying how to install it."""
-    try:
-        import meshio
-    except ImportError:  # pragma: no cover - depends on the installation
-        raise ImportError(
-            'wrinkle: writing results needs meshio; install it with pip install "wrinkle[io]"'
-        ) from None
-    return meshio
 
 
 def step_file_name(index: int) -> str:

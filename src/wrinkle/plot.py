@@ -145,7 +145,8 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
     against the load factor, or the largest nodal displacement if there are no probes.
     Returns the paths of the three files. Raises ValueError if no step has been written.
     """
-    from wrinkle.output import HISTORY, SUMMARY, require_meshio
+    from wrinkle.mesh import require_meshio
+    from wrinkle.output import HISTORY, SUMMARY
 
     out_dir = Path(out_dir)
     summary = json.loads((out_dir / SUMMARY).read_text(encoding="utf-8"))

@@ -4,14 +4,14 @@ Roddeman et al. (1987) replace, where the membrane would be compressed, the real
 by the modified deformation F' = (I + beta n1 (x) n1) F (Part II, eq. 12) and fix the wrinkle
 direction n1 and the wrinkling strain beta by the conditions that the stress carries nothing
 across the wrinkles (Part II, eqs. 31-33). We use the equivalent reference-plane form of
-METHOD.md section 4: with w = F^T n1 / |F^T n1| (unit, reference plane) and
+docs/method.md section 4: with w = F^T n1 / |F^T n1| (unit, reference plane) and
 b = ((1 + beta)^2 - 1) |F^T n1|^2,
 
     C' = F'^T F' = C + b w (x) w,        N(C') w = 0,        b >= 0,
 
 two equations for the angle phi of w in the material frame and for b; plane stress (the third
 condition, eq. 33) is solved inside the material. The stress that enters the nodal forces is
-N(C') itself (the first Piola-Kirchhoff stress is F N(C'), see METHOD.md eq. 11), which is also
+N(C') itself (the first Piola-Kirchhoff stress is F N(C'), see docs/method.md eq. 11), which is also
 the gradient of Pipkin's relaxed energy w(C + b w (x) w).
 
 The consistent tangent follows from the implicit function theorem on the two conditions
@@ -21,7 +21,7 @@ m = (w1^2/2, w2^2/2, w1 w2), g(e, phi, b) = W(phi) s(e') = N(C') w,
     J = dg/d(phi, b) = [W D' b m' + V s', W D' m],
     dN/dE = D' - D' [b m', m] J^-1 W D'.
 
-States (Part II, section 3; METHOD.md section 5): taut if both principal stresses of the plain
+States (Part II, section 3; docs/method.md section 5): taut if both principal stresses of the plain
 law are >= 0, else wrinkled if the major principal Green-Lagrange strain is > 0, else slack.
 """
 
@@ -33,6 +33,8 @@ import numpy as np
 
 from wrinkle import compiled as kernels
 from wrinkle.materials.base import Material
+
+__all__ = ["SLACK", "STATE_NAMES", "TAUT", "WRINKLED", "Wrinkling", "WrinklingError", "WrinklingResponse"]
 
 TAUT, WRINKLED, SLACK = 0, 1, 2
 STATE_NAMES = ("taut", "wrinkled", "slack")
@@ -138,12 +140,17 @@ class Wrinkling:
     def thickness(self) -> float:
         return self.material.thickness
 
+    @property
+    def is_isotropic(self) -> bool:
+        """The material's ``is_isotropic`` (False for a material that does not say)."""
+        return bool(getattr(self.material, "is_isotropic", False))
+
     def energy(self, C: np.ndarray) -> np.ndarray:
         """Relaxed strain energy per unit reference area, (n,)."""
         return self.response(C, tangent=False).energy
 
     def classify(self, C: np.ndarray, plain_stress: np.ndarray) -> np.ndarray:
-        """Element states by the paper's criterion (METHOD.md section 5), (n,) int8; stresses
+        """Element states by the paper's criterion (docs/method.md section 5), (n,) int8; stresses
         and strains at the level of round-off count as zero."""
         state = np.full(C.shape[0], TAUT, dtype=np.int8)
         minor_stress, _ = _symmetric_eigenvalues(plain_stress)

@@ -21,6 +21,18 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+__all__ = [
+    "Material",
+    "MembraneResponse",
+    "as_cauchy_green_batch",
+    "green_lagrange_voigt",
+    "rotate_voigt_tangent",
+    "tangent_is_isotropic",
+    "tangent_to_voigt",
+    "tensor_from_voigt_stress",
+    "voigt_stress",
+]
+
 
 @dataclass
 class MembraneResponse:
@@ -43,6 +55,12 @@ class Material(Protocol):
 
     thickness: float
 
+    @property
+    def is_isotropic(self) -> bool:
+        """Whether the in-plane response is invariant under rotation about the normal (then
+        the element's fibre direction changes no result and may be left unset)."""
+        ...
+
     def energy(self, C: np.ndarray) -> np.ndarray:
         """Strain energy per unit reference area, (n,), for C shaped (n, 2, 2)."""
         ...
@@ -50,6 +68,28 @@ class Material(Protocol):
     def response(self, C: np.ndarray, tangent: bool = True) -> MembraneResponse:
         """Stress resultant, tangent and thickness for C shaped (n, 2, 2)."""
         ...
+
+
+def rotate_voigt_tangent(tangent: np.ndarray, angle: float) -> np.ndarray:
+    """(3, 3) membrane tangent, Voigt (11, 22, 12) with engineering shear, written in a frame
+    turned by ``angle`` (radians) about the normal: T Q T^T with the stress rotation T."""
+    c, s = np.cos(angle), np.sin(angle)
+    T = np.array(
+        [[c * c, s * s, 2 * c * s], [s * s, c * c, -2 * c * s], [-c * s, c * s, c * c - s * s]]
+    )
+    return T @ tangent @ T.T
+
+
+def tangent_is_isotropic(tangent: np.ndarray, rtol: float = 1e-12) -> bool:
+    """Whether the (3, 3) membrane tangent (Voigt (11, 22, 12)) is unchanged, to ``rtol``
+    times its largest entry, by rotations of 30 and 45 degrees about the normal. The
+    anisotropic parts of a plane tangent turn by 2 and 4 times the angle, so invariance under
+    either rotation already means invariance under every rotation."""
+    scale = np.max(np.abs(tangent))
+    return all(
+        np.max(np.abs(rotate_voigt_tangent(tangent, np.radians(degrees)) - tangent)) <= rtol * scale
+        for degrees in (30.0, 45.0)
+    )
 
 
 def voigt_stress(N: np.ndarray) -> np.ndarray:

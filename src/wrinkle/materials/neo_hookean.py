@@ -40,6 +40,8 @@ import numpy as np
 
 from wrinkle.materials.base import MembraneResponse, as_cauchy_green_batch
 
+__all__ = ["NeoHookean"]
+
 _MAX_NEWTON = 60
 
 
@@ -102,6 +104,11 @@ class NeoHookean:
         self.mu = _check_positive(mu, "mu")
         self.thickness = _check_positive(thickness, "thickness")
         self.lmbda = None if lmbda is None else _check_positive(lmbda, "lmbda")
+
+    @property
+    def is_isotropic(self) -> bool:
+        """Always True: the neo-Hookean law is isotropic, the fibre direction changes nothing."""
+        return True
 
     # ------------------------------------------------------------------ plane stress
     def _components(self, C: np.ndarray) -> tuple[np.ndarray, ...]:

@@ -24,7 +24,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from wrinkle.materials.base import MembraneResponse, as_cauchy_green_batch
+from wrinkle.materials.base import (
+    MembraneResponse,
+    as_cauchy_green_batch,
+    tangent_is_isotropic,
+)
+
+__all__ = ["IN_PLANE", "OUT_OF_PLANE", "StVenantKirchhoff"]
 
 #: Voigt positions (in the 6-vector 11, 22, 33, 23, 13, 12) of the in-plane components.
 IN_PLANE = np.array([0, 1, 5])
@@ -66,6 +72,7 @@ class StVenantKirchhoff:
     plane_stress_stiffness: (3, 3) condensed stiffness Q, Voigt (11, 22, 12), force/area.
     out_of_plane_strain: (3, 3) matrix R with (E33, 2 E23, 2 E13) = R (E11, E22, 2 E12).
     thickness: D0.
+    is_isotropic: whether Q is invariant under in-plane rotation (``tangent_is_isotropic``).
 
     Raises ValueError, naming the parameter, for a stiffness that is not 6x6, not finite, not
     symmetric (relative tolerance 1e-8) or not positive definite, and for a thickness that is
@@ -101,6 +108,15 @@ class StVenantKirchhoff:
         self.out_of_plane_strain = -np.linalg.solve(H_oo, H_oi)
         Q = H_ii + H_io @ self.out_of_plane_strain
         self.plane_stress_stiffness = 0.5 * (Q + Q.T)
+        self._isotropic = tangent_is_isotropic(self.plane_stress_stiffness)
+
+    @property
+    def is_isotropic(self) -> bool:
+        """Whether the plane-stress stiffness Q (the tangent at C = I, the same at every C) is
+        invariant under rotation about the normal, to 1e-12 of its largest entry: True for
+        ``isotropic`` and for ``transversely_isotropic`` with E_L = E_T and
+        G_LT = E_L / (2 (1 + nu_LT)); then the fibre direction changes no result."""
+        return self._isotropic
 
     # ------------------------------------------------------------------ constructors
     @classmethod

@@ -11,11 +11,13 @@ positions of the diagonal) and factorises only the values again.
   A symmetric matrix is factorised as symmetric indefinite (LDL^T of its upper triangle): on the
   airbag's tangent 0.5-0.9 of the time and 0.6 of the memory of the LU used otherwise
   (``benchmarks/linear_solvers.py``).
-- ``cholmod``: CHOLMOD supernodal Cholesky through ``scikit-sparse``, symmetric positive
-  definite matrices only (an indefinite K + shift I is reported as singular, so the
-  regulariser grows until it is positive definite).
+- ``cholmod``: CHOLMOD supernodal Cholesky through ``scikit-sparse`` (installed separately,
+  against the system's SuiteSparse), symmetric positive definite matrices only (an
+  indefinite K + shift I is reported as singular, so the regulariser grows until it is
+  positive definite).
 - ``amg``: conjugate gradients preconditioned by smoothed-aggregation algebraic multigrid
-  (``pyamg``), symmetric positive definite matrices only; an iterative, inexact solve.
+  (``pyamg``, installed separately), symmetric positive definite matrices only; an
+  iterative, inexact solve.
 
 ``make_linear_solver("auto", n_dofs)`` takes PARDISO for large problems when it is installed,
 SuperLU otherwise.
@@ -31,6 +33,20 @@ from collections.abc import Callable
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+
+__all__ = [
+    "AUTO_PARDISO_DOFS",
+    "INSTALL_HINTS",
+    "LINEAR_SOLVERS",
+    "AlgebraicMultigrid",
+    "Cholmod",
+    "Pardiso",
+    "SuperLU",
+    "SymmetryCheck",
+    "diagonal_positions",
+    "make_linear_solver",
+    "upper_triangle_positions",
+]
 
 logger = logging.getLogger("wrinkle.solver")
 
@@ -252,12 +268,21 @@ class AlgebraicMultigrid:
 
 LINEAR_SOLVERS = {"superlu": SuperLU, "pardiso": Pardiso, "cholmod": Cholmod,
                   "amg": AlgebraicMultigrid}
+#: How to install the package each optional back-end needs, for the messages.
+INSTALL_HINTS = {
+    "pardiso": 'pypardiso: install it with pip install "wrinkle[fast]" (x86-64 only)',
+    "cholmod": (
+        "scikit-sparse, which is built against the system's SuiteSparse: install that first "
+        "(Debian/Ubuntu: apt install libsuitesparse-dev), then pip install scikit-sparse"
+    ),
+    "amg": "pyamg: install it with pip install pyamg",
+}
 
 
 def make_linear_solver(name: str = "auto", n_dofs: int = 0):
     """The back-end called ``name`` (one of LINEAR_SOLVERS, or "auto": PARDISO from
     AUTO_PARDISO_DOFS unknowns if pypardiso is installed, else SuperLU). ValueError for an
-    unknown name; ImportError naming the extra for a back-end that is not installed."""
+    unknown name; ImportError saying how to install a back-end that is not installed."""
     if name == "auto":
         if n_dofs >= AUTO_PARDISO_DOFS:
             try:
@@ -272,11 +297,7 @@ def make_linear_solver(name: str = "auto", n_dofs: int = 0):
     try:
         return LINEAR_SOLVERS[name]()
     except (ImportError, OSError) as error:
-        package = {"pardiso": "pypardiso", "cholmod": "scikit-sparse", "amg": "pyamg"}[name]
-        raise ImportError(
-            f"linear solver '{name}' needs {package} ({error}); "
-            f'install it with pip install "wrinkle[fast]"'
-        ) from None
+        raise ImportError(f"linear solver '{name}' needs {INSTALL_HINTS[name]} ({error})") from None
 
 
 def diagonal_positions(A: sp.csr_matrix) -> np.ndarray:
