@@ -79,8 +79,9 @@ PARTS = [
 def airbag_model(nx: int):
     from wrinkle.case import read_case
 
-    return read_case(ROOT / "examples" / "airbag.toml",
-                     overrides={"mesh": {"rectangle": {"nx": nx, "ny": nx}}}).model
+    return read_case(
+        ROOT / "examples" / "airbag.toml", overrides={"mesh": {"rectangle": {"nx": nx, "ny": nx}}}
+    ).model
 
 
 # -- states -----------------------------------------------------------------------------
@@ -128,10 +129,12 @@ def make_states(path: Path, nx: int, iterations: list[int]) -> None:
     per_interval = np.bincount(calls[:, 0] + 1, weights=calls[:, 1]).astype(int)
     rejected = int(np.sum(np.maximum(per_interval - 1, 0)))
     print(f"saved {sorted(saved)} to {path}")
-    print(f"{newton} Newton iterations: {with_k} evaluations with stiffness "
-          f"({with_k / newton:.2f} per iteration; {rejected} of them, "
-          f"{rejected / newton:.2f} per iteration, at rejected trial points), {without_k} "
-          f"without ({without_k / newton:.2f} per iteration)")
+    print(
+        f"{newton} Newton iterations: {with_k} evaluations with stiffness "
+        f"({with_k / newton:.2f} per iteration; {rejected} of them, "
+        f"{rejected / newton:.2f} per iteration, at rejected trial points), {without_k} "
+        f"without ({without_k / newton:.2f} per iteration)"
+    )
 
 
 # -- timing -----------------------------------------------------------------------------
@@ -242,24 +245,34 @@ def print_tables(results: list[tuple[str, dict]]) -> None:
     """One table per state: total and parts (ms) of each code side by side."""
     names = [name for name, _ in results]
     first = results[0][1]
-    print(f"airbag, {first['elements']:,} elements; ms per evaluation, medians; parts exclude "
-          "the parts inside them")
+    print(
+        f"airbag, {first['elements']:,} elements; ms per evaluation, medians; parts exclude "
+        "the parts inside them"
+    )
     width = max(len(label) for *_, label in PARTS) + 2
     for key, row in first["states"].items():
-        print(f"\nstate {key}: {100 * row['wrinkled']:.0f} % wrinkled, "
-              f"{100 * row['slack']:.1f} % slack")
+        print(
+            f"\nstate {key}: {100 * row['wrinkled']:.0f} % wrinkled, "
+            f"{100 * row['slack']:.1f} % slack"
+        )
         header = "".join(f"{name + ' K':>14}{name + ' f':>14}" for name in names)
         print(f"{'':<{width}}{header}")
-        line = "".join(f"{r['states'][key]['K']:14.1f}{r['states'][key]['f']:14.1f}"
-                       for _, r in results)
+        line = "".join(
+            f"{r['states'][key]['K']:14.1f}{r['states'][key]['f']:14.1f}" for _, r in results
+        )
         print(f"{'evaluate (uninstrumented)':<{width}}{line}")
-        labels = [label for label in dict.fromkeys(label for *_, label in PARTS)
-                  if any(label in r["states"][key].get(f"parts {s}", {})
-                         for _, r in results for s in "Kf")]
+        labels = [
+            label
+            for label in dict.fromkeys(label for *_, label in PARTS)
+            if any(
+                label in r["states"][key].get(f"parts {s}", {}) for _, r in results for s in "Kf"
+            )
+        ]
         for label in labels:
             line = "".join(
-                "".join(f"{r['states'][key][f'parts {s}'].get(label, float('nan')):14.1f}"
-                        for s in "Kf")
+                "".join(
+                    f"{r['states'][key][f'parts {s}'].get(label, float('nan')):14.1f}" for s in "Kf"
+                )
                 for _, r in results
             )
             print(f"{label:<{width}}{line}")
@@ -273,11 +286,13 @@ def print_tables(results: list[tuple[str, dict]]) -> None:
             calls = counts.get("residual calls", 0)
             rows = counts.get("residual rows", 0)
             wrinkled = max(1, row["wrinkled"] * first["elements"])
-            print(f"  {name}: residual and Jacobian: {calls} calls, {rows:,} rows "
-                  f"({rows / wrinkled:.2f} per wrinkled element, admissibility checks "
-                  f"included where they use it); admissibility checks: "
-                  f"{counts.get('admissibility rows', 0) / wrinkled:.2f} per wrinkled element; "
-                  f"angle search on {counts.get('angle search rows', 0)} elements")
+            print(
+                f"  {name}: residual and Jacobian: {calls} calls, {rows:,} rows "
+                f"({rows / wrinkled:.2f} per wrinkled element, admissibility checks "
+                f"included where they use it); admissibility checks: "
+                f"{counts.get('admissibility rows', 0) / wrinkled:.2f} per wrinkled element; "
+                f"angle search on {counts.get('angle search rows', 0)} elements"
+            )
 
 
 def compare(sources: list[str], states: Path, nx: int, repeat: int, rounds: int) -> None:
@@ -287,9 +302,21 @@ def compare(sources: list[str], states: Path, nx: int, repeat: int, rounds: int)
         for source in sources if round_ % 2 == 0 else sources[::-1]:
             environment = {**os.environ, "PYTHONPATH": source}
             output = subprocess.run(
-                [sys.executable, __file__, "--states", str(states), "--nx", str(nx),
-                 "--repeat", str(repeat), "--json"],
-                env=environment, check=True, capture_output=True, text=True,
+                [
+                    sys.executable,
+                    __file__,
+                    "--states",
+                    str(states),
+                    "--nx",
+                    str(nx),
+                    "--repeat",
+                    str(repeat),
+                    "--json",
+                ],
+                env=environment,
+                check=True,
+                capture_output=True,
+                text=True,
             ).stdout
             runs[source].append(json.loads(output.strip().splitlines()[-1]))
             print(f"round {round_ + 1}: {source} done", file=sys.stderr, flush=True)

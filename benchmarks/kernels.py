@@ -99,8 +99,9 @@ def benchmark_case(n_elements: float, material: str = "ti"):
     """(mesh, MembraneElements, current element coordinates (n, 3, 3)) of one benchmark size."""
     mesh = benchmark_mesh(n_elements)
     geometry = reference_geometry(mesh.nodes, mesh.triangles)
-    elements = MembraneElements(geometry, Wrinkling(make_material(material)),
-                                compiled=compiled.enabled(mesh.n_elements))
+    elements = MembraneElements(
+        geometry, Wrinkling(make_material(material)), compiled=compiled.enabled(mesh.n_elements)
+    )
     x_elements = element_coordinates(benchmark_deformation(mesh.nodes), mesh.triangles)
     return mesh, elements, x_elements
 
@@ -268,8 +269,9 @@ def main(argv: list[str] | None = None) -> None:
             args.material,
         ]
         environment = {**os.environ, "WRINKLE_NUMBA": "1" if kernels == "numba" else "0"}
-        completed = subprocess.run(command, capture_output=True, text=True, check=False,
-                                   env=environment)
+        completed = subprocess.run(
+            command, capture_output=True, text=True, check=False, env=environment
+        )
         if completed.returncode != 0:
             sys.stderr.write(completed.stderr)
             raise SystemExit(f"benchmark of size {size:g} ({kernels}) failed")

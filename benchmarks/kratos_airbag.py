@@ -118,7 +118,8 @@ class Airbag:
             ids = [int(node) + 1 for node in triangle]
             part.CreateNewElement("MembraneElement3D3N", number, ids, self.membrane)
             self.pressure_loads.append(
-                part.CreateNewCondition("SurfaceLoadCondition3D3N", number, ids, self.membrane))
+                part.CreateNewCondition("SurfaceLoadCondition3D3N", number, ids, self.membrane)
+            )
 
         # a spring element and a point load on every node with a held dof (seam, symmetry)
         self.spring_nodes = np.flatnonzero(held.any(axis=1))
@@ -128,10 +129,16 @@ class Airbag:
         first = len(problem["triangles"]) + 1
         self.springs, self.spring_preloads = [], []
         for number, node in enumerate(self.spring_nodes, start=first):
-            self.springs.append(part.CreateNewElement(
-                "NodalConcentratedElement3D1N", number, [int(node) + 1], spring_properties))
-            self.spring_preloads.append(part.CreateNewCondition(
-                "PointLoadCondition3D1N", number, [int(node) + 1], spring_properties))
+            self.springs.append(
+                part.CreateNewElement(
+                    "NodalConcentratedElement3D1N", number, [int(node) + 1], spring_properties
+                )
+            )
+            self.spring_preloads.append(
+                part.CreateNewCondition(
+                    "PointLoadCondition3D1N", number, [int(node) + 1], spring_properties
+                )
+            )
         self.set_seam_spring(seam_spring)
 
     def nodes(self):
@@ -151,8 +158,9 @@ class Airbag:
         held = self.problem["held"][self.spring_nodes]
         seam = held[:, 2]
         membrane_scale = float(self.problem["young_modulus"]) * float(self.problem["thickness"])
-        self.spring_stiffness = np.where(held, membrane_scale,
-                                         np.where(seam[:, None], stiffness, 0.0))
+        self.spring_stiffness = np.where(
+            held, membrane_scale, np.where(seam[:, None], stiffness, 0.0)
+        )
         self._apply_springs()
 
     def anchor_springs(self) -> None:
@@ -166,7 +174,8 @@ class Airbag:
         the initial position, k u (it ignores NODAL_INITIAL_DISPLACEMENT), so a point load
         k anchor on the same node moves the anchor."""
         for spring, preload, stiffness, anchor in zip(
-                self.springs, self.spring_preloads, self.spring_stiffness, self.spring_anchor):
+            self.springs, self.spring_preloads, self.spring_stiffness, self.spring_anchor
+        ):
             spring.SetValue(SMA.NODAL_DISPLACEMENT_STIFFNESS, KM.Array3(list(stiffness)))
             preload.SetValue(SMA.POINT_LOAD, KM.Array3(list(stiffness * anchor)))
 
@@ -183,8 +192,9 @@ class Airbag:
 
     def displacement(self) -> np.ndarray:
         """Nodal displacements (n_nodes, 3), m."""
-        return np.array([[node.GetSolutionStepValue(d) for d in DISPLACEMENTS]
-                         for node in self.nodes()])
+        return np.array(
+            [[node.GetSolutionStepValue(d) for d in DISPLACEMENTS] for node in self.nodes()]
+        )
 
     def force_scale(self, pressure: float) -> float:
         """max(|f_ext|, |reactions|) (N) at the current shape: f_ext the consistent pressure
@@ -197,13 +207,20 @@ class Airbag:
         for k in range(3):
             np.add.at(external, triangles[:, k], pressure * area_vectors / 3.0)
         held = self.problem["held"]
-        reactions = np.array([[node.GetSolutionStepValue(r) for r in REACTIONS]
-                              for node in self.nodes()])[held]
+        reactions = np.array(
+            [[node.GetSolutionStepValue(r) for r in REACTIONS] for node in self.nodes()]
+        )[held]
         return max(float(np.linalg.norm(external)), float(np.linalg.norm(reactions)))
 
 
-def newton(airbag: Airbag, linear_solver, relative: float, absolute: float,
-           max_iterations: int, line_search: bool):
+def newton(
+    airbag: Airbag,
+    linear_solver,
+    relative: float,
+    absolute: float,
+    max_iterations: int,
+    line_search: bool,
+):
     """A Kratos static Newton-Raphson strategy on the airbag's model part."""
     criterion = KM.ResidualCriteria(relative, absolute)
     scheme = KM.ResidualBasedIncrementalUpdateStaticScheme()
@@ -234,26 +251,46 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("problem", help=".npz written by vs_kratos.py")
     parser.add_argument("--law", choices=["wrinkling", "linear"], default="wrinkling")
-    parser.add_argument("--prestress", type=float, default=1e5,
-                        help="ramp prestress s0, Pa (0: none)")
-    parser.add_argument("--seam-spring", type=float, default=1e3,
-                        help="ramp in-plane seam spring, N/m (0: none)")
-    parser.add_argument("--release-spring", type=float, default=1.0,
-                        help="seam spring of the release steps, N/m, anchored at the shape "
-                        "each step starts from")
-    parser.add_argument("--release-steps", type=int, default=1,
-                        help="release steps at full pressure; all but the last solved to "
-                        "--ramp-tolerance")
+    parser.add_argument(
+        "--prestress", type=float, default=1e5, help="ramp prestress s0, Pa (0: none)"
+    )
+    parser.add_argument(
+        "--seam-spring", type=float, default=1e3, help="ramp in-plane seam spring, N/m (0: none)"
+    )
+    parser.add_argument(
+        "--release-spring",
+        type=float,
+        default=1.0,
+        help="seam spring of the release steps, N/m, anchored at the shape each step starts from",
+    )
+    parser.add_argument(
+        "--release-steps",
+        type=int,
+        default=1,
+        help="release steps at full pressure; all but the last solved to --ramp-tolerance",
+    )
     parser.add_argument("--ramp-steps", type=int, default=2)
-    parser.add_argument("--ramp-tolerance", type=float, default=1e-2,
-                        help="residual reduction of the loose steps (relative to their first)")
-    parser.add_argument("--tolerance", type=float,
-                        help="of the last step (default: the problem file's, wrinkle's)")
+    parser.add_argument(
+        "--ramp-tolerance",
+        type=float,
+        default=1e-2,
+        help="residual reduction of the loose steps (relative to their first)",
+    )
+    parser.add_argument(
+        "--tolerance", type=float, help="of the last step (default: the problem file's, wrinkle's)"
+    )
     parser.add_argument("--max-iterations", type=int, default=5000, help="per load step")
-    parser.add_argument("--line-search", choices=["none", "ramp", "release", "both"],
-                        default="none", help="Kratos' LineSearchStrategy in these stages")
-    parser.add_argument("--linear-solver", default="sparse_lu",
-                        help="Kratos LinearSolverFactory name: sparse_lu, skyline_lu_factorization")
+    parser.add_argument(
+        "--line-search",
+        choices=["none", "ramp", "release", "both"],
+        default="none",
+        help="Kratos' LineSearchStrategy in these stages",
+    )
+    parser.add_argument(
+        "--linear-solver",
+        default="sparse_lu",
+        help="Kratos LinearSolverFactory name: sparse_lu, skyline_lu_factorization",
+    )
     parser.add_argument("--verbose", action="store_true", help="Kratos' residual ratios")
     parser.add_argument("--save", help="write the final displacements (n_nodes, 3), m, here")
     args = parser.parse_args()
@@ -268,23 +305,36 @@ def main() -> None:
         args.tolerance = float(problem["tolerance"])
     airbag = Airbag(problem, args.law, args.prestress, args.seam_spring)
     linear_solver = KM.LinearSolverFactory().Create(
-        KM.Parameters(json.dumps({"solver_type": args.linear_solver})))
+        KM.Parameters(json.dumps({"solver_type": args.linear_solver}))
+    )
     n_free = int(np.count_nonzero(~problem["held"]))
     setup_s = time.perf_counter() - start
 
-    row = {"law": args.law, "prestress_pa": args.prestress, "seam_spring_n_per_m": args.seam_spring,
-           "ramp_steps": args.ramp_steps, "ramp_tolerance": args.ramp_tolerance,
-           "release_spring_n_per_m": args.release_spring, "release_steps": args.release_steps,
-           "tolerance": args.tolerance, "linear_solver": args.linear_solver,
-           "line_search": args.line_search, "unknowns": n_free,
-           "elements": len(problem["triangles"])}
+    row = {
+        "law": args.law,
+        "prestress_pa": args.prestress,
+        "seam_spring_n_per_m": args.seam_spring,
+        "ramp_steps": args.ramp_steps,
+        "ramp_tolerance": args.ramp_tolerance,
+        "release_spring_n_per_m": args.release_spring,
+        "release_steps": args.release_steps,
+        "tolerance": args.tolerance,
+        "linear_solver": args.linear_solver,
+        "line_search": args.line_search,
+        "unknowns": n_free,
+        "elements": len(problem["triangles"]),
+    }
     # the solution path: (stage, prestress Pa, seam spring N/m, pressure Pa, final?)
     stabilised = args.prestress > 0.0 or args.seam_spring > 0.0
     steps = args.ramp_steps if stabilised else 0
-    path = [("ramp", args.prestress, args.seam_spring, pressure * step / steps, False)
-            for step in range(1, steps + 1)]
-    path += [("release", 0.0, args.release_spring, pressure, step == args.release_steps)
-             for step in range(1, args.release_steps + 1)]
+    path = [
+        ("ramp", args.prestress, args.seam_spring, pressure * step / steps, False)
+        for step in range(1, steps + 1)
+    ]
+    path += [
+        ("release", 0.0, args.release_spring, pressure, step == args.release_steps)
+        for step in range(1, args.release_steps + 1)
+    ]
     iterations = {"ramp": 0, "release": 0}
     converged, error = True, ""
     try:
@@ -298,13 +348,20 @@ def main() -> None:
                 absolute = args.tolerance * airbag.force_scale(load) / n_free
             else:  # loose: relative to the step's first residual only
                 relative, absolute = args.ramp_tolerance, 0.0
-            strategy = newton(airbag, linear_solver, relative, absolute, args.max_iterations,
-                              args.line_search in (stage, "both"))
+            strategy = newton(
+                airbag,
+                linear_solver,
+                relative,
+                absolute,
+                args.max_iterations,
+                args.line_search in (stage, "both"),
+            )
             converged, count = solve_step(airbag, strategy, step, load)
             iterations[stage] += count
             if not converged:
-                raise RuntimeError(f"step {step} of {len(path)}: no convergence in {count} "
-                                   "iterations")
+                raise RuntimeError(
+                    f"step {step} of {len(path)}: no convergence in {count} iterations"
+                )
     except RuntimeError as failure:  # ours, or Kratos': singular matrix, ...
         if converged:  # Kratos stopped inside an iteration
             iterations[stage] += int(airbag.part.ProcessInfo[KM.NL_ITERATION_NUMBER])
@@ -312,14 +369,19 @@ def main() -> None:
     solve_s = time.perf_counter() - start - setup_s
 
     centre = int(problem["centre"][0])
-    row.update({
-        "converged": converged, "error": error,
-        "iterations": iterations["ramp"] + iterations["release"],
-        "ramp_iterations": iterations["ramp"], "release_iterations": iterations["release"],
-        "deflection_mm": 1e3 * float(airbag.displacement()[centre, 2]),
-        "spring_force_n": airbag.spring_force(),
-        "setup_s": setup_s, "solve_s": solve_s,
-    })
+    row.update(
+        {
+            "converged": converged,
+            "error": error,
+            "iterations": iterations["ramp"] + iterations["release"],
+            "ramp_iterations": iterations["ramp"],
+            "release_iterations": iterations["release"],
+            "deflection_mm": 1e3 * float(airbag.displacement()[centre, 2]),
+            "spring_force_n": airbag.spring_force(),
+            "setup_s": setup_s,
+            "solve_s": solve_s,
+        }
+    )
     if args.save:
         np.save(args.save, airbag.displacement())
     print(json.dumps(row), flush=True)

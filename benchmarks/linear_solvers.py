@@ -95,7 +95,8 @@ def measure(name: str, A, b, symmetric: bool, repeat: int) -> dict:
         residuals.append(float(np.linalg.norm(B @ x - b) / np.linalg.norm(b)))
         del solve, backend
     return {
-        "solver": name, "status": "ok",
+        "solver": name,
+        "status": "ok",
         "first_factorisation_s": statistics.median(first),
         "refactorisation_s": statistics.median(again),
         "solve_s": statistics.median(solves),
@@ -106,16 +107,23 @@ def measure(name: str, A, b, symmetric: bool, repeat: int) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sizes", type=int, nargs="+", default=[32, 100, 316],
-                        help="squares per side of the airbag mesh (2 n^2 triangles)")
+    parser.add_argument(
+        "--sizes",
+        type=int,
+        nargs="+",
+        default=[32, 100, 316],
+        help="squares per side of the airbag mesh (2 n^2 triangles)",
+    )
     parser.add_argument("--solvers", nargs="+", default=[*LINEAR_SOLVERS, "pardiso/LU"])
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--csv", default="linear_solvers.csv")
     args = parser.parse_args()
     interpolant = coarse_solution()
     rows = []
-    header = (f"{'elements':>9} {'unknowns':>9} {'solver':>10} {'1st fact. s':>11} "
-              f"{'refact. s':>10} {'solve s':>8} {'rel. resid.':>11} {'factor MB':>9}")
+    header = (
+        f"{'elements':>9} {'unknowns':>9} {'solver':>10} {'1st fact. s':>11} "
+        f"{'refact. s':>10} {'solve s':>8} {'rel. resid.':>11} {'factor MB':>9}"
+    )
     print(header)
     for n in args.sizes:
         A, b, symmetric, n_elements = airbag_matrix(n, interpolant)
@@ -129,11 +137,24 @@ def main() -> None:
             if row["status"] != "ok":
                 print(f"{n_elements:9d} {A.shape[0]:9d} {name:>10} {row['status']}")
                 continue
-            print(f"{n_elements:9d} {A.shape[0]:9d} {name:>10} {row['first_factorisation_s']:11.3f} "
-                  f"{row['refactorisation_s']:10.3f} {row['solve_s']:8.3f} "
-                  f"{row['relative_residual']:11.1e} {row['factor_memory_mb']:9.0f}", flush=True)
-    keys = ["elements", "unknowns", "symmetric", "solver", "status", "first_factorisation_s",
-            "refactorisation_s", "solve_s", "relative_residual", "factor_memory_mb"]
+            print(
+                f"{n_elements:9d} {A.shape[0]:9d} {name:>10} {row['first_factorisation_s']:11.3f} "
+                f"{row['refactorisation_s']:10.3f} {row['solve_s']:8.3f} "
+                f"{row['relative_residual']:11.1e} {row['factor_memory_mb']:9.0f}",
+                flush=True,
+            )
+    keys = [
+        "elements",
+        "unknowns",
+        "symmetric",
+        "solver",
+        "status",
+        "first_factorisation_s",
+        "refactorisation_s",
+        "solve_s",
+        "relative_residual",
+        "factor_memory_mb",
+    ]
     write_csv(args.csv, rows, keys)
 
 

@@ -42,24 +42,53 @@ SIZES = {  # squares per side: 2 n^2 triangles
     "shear_stretch": [23, 71, 224, 708],
 }
 RESULT_NAMES = {"airbag": "centre deflection (mm)", "shear_stretch": "top-edge force F1"}
-FIELDS = ["problem", "elements", "unknowns", "steps", "iterations", "max_per_step", "converged",
-          "element_s", "assembly_s",
-          "linear_s", "rest_s", "total_s", "outside_linear", "peak_rss_mb", "result",
-          "result_name", "linear_solver"]
+FIELDS = [
+    "problem",
+    "elements",
+    "unknowns",
+    "steps",
+    "iterations",
+    "max_per_step",
+    "converged",
+    "element_s",
+    "assembly_s",
+    "linear_s",
+    "rest_s",
+    "total_s",
+    "outside_linear",
+    "peak_rss_mb",
+    "result",
+    "result_name",
+    "linear_solver",
+]
 
 
-def make_row(known: dict, per_step: list[int], converged: bool, timings: dict | None,
-             total: float, result: float) -> dict:
+def make_row(
+    known: dict,
+    per_step: list[int],
+    converged: bool,
+    timings: dict | None,
+    total: float,
+    result: float,
+) -> dict:
     """A row of the table from the columns known before the solve, the Newton iterations of
     each load step, the stopwatch's seconds per part (``Results.timings``; None: not known)
     and the wall time since the process began the case."""
     nan = float("nan")
-    element, assembly, linear = ((timings[part] if timings else nan)
-                                 for part in ("element evaluation", "assembly", "linear solves"))
+    element, assembly, linear = (
+        (timings[part] if timings else nan)
+        for part in ("element evaluation", "assembly", "linear solves")
+    )
     return {
-        **known, "iterations": sum(per_step), "max_per_step": max(per_step),
-        "converged": converged, "element_s": element, "assembly_s": assembly,
-        "linear_s": linear, "rest_s": total - linear - element - assembly, "total_s": total,
+        **known,
+        "iterations": sum(per_step),
+        "max_per_step": max(per_step),
+        "converged": converged,
+        "element_s": element,
+        "assembly_s": assembly,
+        "linear_s": linear,
+        "rest_s": total - linear - element - assembly,
+        "total_s": total,
         "outside_linear": 1.0 - linear / total,
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "result": result,
@@ -97,16 +126,32 @@ class Progress(logging.Handler):
         else:
             return
         timings = self.stopwatch.summary() if self.stopwatch is not None else None
-        row = make_row(self.known, [*self.per_step, self.iteration], False, timings,
-                       time.perf_counter() - self.start, float("nan"))
-        row.update(step=len(self.per_step) + 1, step_iteration=self.iteration,
-                   residual=self.residual, needed=self.needed, time_split=timings is not None)
+        row = make_row(
+            self.known,
+            [*self.per_step, self.iteration],
+            False,
+            timings,
+            time.perf_counter() - self.start,
+            float("nan"),
+        )
+        row.update(
+            step=len(self.per_step) + 1,
+            step_iteration=self.iteration,
+            residual=self.residual,
+            needed=self.needed,
+            time_split=timings is not None,
+        )
         with open(self.path, "a") as file:  # written out at once, for the parent to read
             file.write(json.dumps(row) + "\n")
 
 
-def solve_one(problem: str, n: int, linear_solver: str, max_iterations: int | None,
-              progress: str | None = None) -> dict:
+def solve_one(
+    problem: str,
+    n: int,
+    linear_solver: str,
+    max_iterations: int | None,
+    progress: str | None = None,
+) -> dict:
     """Solve one mesh in this process; the row of the table (also when the solve fails).
     ``progress``: a file to write a partial row to after each Newton iteration (``Progress``)."""
     import numpy as np
@@ -117,17 +162,23 @@ def solve_one(problem: str, n: int, linear_solver: str, max_iterations: int | No
     from wrinkle.solvers.linear import make_linear_solver
 
     start = time.perf_counter()
-    case = read_case(ROOT / "examples" / f"{problem}.toml",
-                     overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}})
+    case = read_case(
+        ROOT / "examples" / f"{problem}.toml", overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}}
+    )
     model = case.model
     steps = case.settings.steps
     # the case's load steps, no cut-back: a failed step ends the run
-    settings = case.settings.replace(linear_solver=linear_solver, max_iterations=max_iterations,
-                                     min_step=1.0 / steps)
-    known = {"problem": problem, "elements": model.mesh.n_elements,
-             "unknowns": int(np.count_nonzero(~model.constrained)), "steps": steps,
-             "result_name": RESULT_NAMES[problem],
-             "linear_solver": make_linear_solver(linear_solver, model.n_dofs).name}
+    settings = case.settings.replace(
+        linear_solver=linear_solver, max_iterations=max_iterations, min_step=1.0 / steps
+    )
+    known = {
+        "problem": problem,
+        "elements": model.mesh.n_elements,
+        "unknowns": int(np.count_nonzero(~model.constrained)),
+        "steps": steps,
+        "result_name": RESULT_NAMES[problem],
+        "linear_solver": make_linear_solver(linear_solver, model.n_dofs).name,
+    }
     log = logging.getLogger("wrinkle")  # the solver's "wrinkle.solver" messages come here too
     level = log.level
     results = Results(model)  # what Model.solve does, with the stopwatch in reach
@@ -138,8 +189,13 @@ def solve_one(problem: str, n: int, linear_solver: str, max_iterations: int | No
         log.setLevel(logging.INFO)
     failed = None
     try:
-        follow_load_path(model.discretise(), settings.solver(), settings.controller(),
-                         on_step=results.append, timer=results.stopwatch)
+        follow_load_path(
+            model.discretise(),
+            settings.solver(),
+            settings.controller(),
+            on_step=results.append,
+            timer=results.stopwatch,
+        )
     except ConvergenceError as error:
         failed = error
     finally:
@@ -174,8 +230,10 @@ def stopped_row(progress: Path, time_limit: float) -> dict | None:
         if row["residual"] != row["residual"]:  # NaN: stopped between two load steps
             where = f"in step {row['step']}, after step {row['step'] - 1} converged"
         else:
-            where = (f"at iteration {row['step_iteration']} of step {row['step']} (residual "
-                     f"{row['residual']:.2e}, {row['needed']:.2e} needed)")
+            where = (
+                f"at iteration {row['step_iteration']} of step {row['step']} (residual "
+                f"{row['residual']:.2e}, {row['needed']:.2e} needed)"
+            )
         row["stopped"] = f"stopped after {time_limit:.0f} s {where}"
         if not row["time_split"]:
             row["stopped"] += ", time split not known"
@@ -190,37 +248,52 @@ def print_row(row: dict) -> None:
         result = f"{row['result_name']} = {row['result']:.6g}"
     else:
         result = "NOT CONVERGED"
-    print(f"{row['problem']:>13} {row['elements']:9d} {row['unknowns']:9d} "
-          f"{row['steps']:5d} {row['iterations']:5d} {row['max_per_step']:8d} "
-          f"{row['element_s']:10.2f} {row['assembly_s']:10.2f} {row['linear_s']:9.2f} "
-          f"{row['rest_s']:7.2f} {row['total_s']:8.1f} {row['outside_linear']:10.0%} "
-          f"{row['peak_rss_mb']:8.0f}  {result}", flush=True)
+    print(
+        f"{row['problem']:>13} {row['elements']:9d} {row['unknowns']:9d} "
+        f"{row['steps']:5d} {row['iterations']:5d} {row['max_per_step']:8d} "
+        f"{row['element_s']:10.2f} {row['assembly_s']:10.2f} {row['linear_s']:9.2f} "
+        f"{row['rest_s']:7.2f} {row['total_s']:8.1f} {row['outside_linear']:10.0%} "
+        f"{row['peak_rss_mb']:8.0f}  {result}",
+        flush=True,
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--max-elements", type=float, default=2.5e5,
-                        help="skip meshes with more elements than this")
+    parser.add_argument(
+        "--max-elements", type=float, default=2.5e5, help="skip meshes with more elements than this"
+    )
     parser.add_argument("--problems", nargs="+", default=list(SIZES), choices=list(SIZES))
-    parser.add_argument("--sizes", type=int, nargs="+",
-                        help="squares per side instead of the default meshes")
+    parser.add_argument(
+        "--sizes", type=int, nargs="+", help="squares per side instead of the default meshes"
+    )
     parser.add_argument("--linear-solver", default="auto")
-    parser.add_argument("--max-iterations", type=int,
-                        help="Newton iterations per load step (default: the solver's, 100)")
-    parser.add_argument("--time-limit", type=float, default=1800.0,
-                        help="seconds per mesh before its process is stopped")
+    parser.add_argument(
+        "--max-iterations",
+        type=int,
+        help="Newton iterations per load step (default: the solver's, 100)",
+    )
+    parser.add_argument(
+        "--time-limit",
+        type=float,
+        default=1800.0,
+        help="seconds per mesh before its process is stopped",
+    )
     parser.add_argument("--csv", default="scale.csv")
     parser.add_argument("--one", nargs=2, metavar=("PROBLEM", "N"), help=argparse.SUPPRESS)
     parser.add_argument("--progress", help=argparse.SUPPRESS)  # --one's partial rows go here
     args = parser.parse_args()
     if args.one:
-        row = solve_one(args.one[0], int(args.one[1]), args.linear_solver, args.max_iterations,
-                        args.progress)
+        row = solve_one(
+            args.one[0], int(args.one[1]), args.linear_solver, args.max_iterations, args.progress
+        )
         print(json.dumps(row))
         return
-    print(f"{'problem':>13} {'elements':>9} {'unknowns':>9} {'steps':>5} {'iter':>5} "
-          f"{'max/step':>8} {'elements s':>10} {'assembly s':>10} {'linear s':>9} "
-          f"{'rest s':>7} {'total s':>8} {'not linear':>10} {'peak MB':>8}  result")
+    print(
+        f"{'problem':>13} {'elements':>9} {'unknowns':>9} {'steps':>5} {'iter':>5} "
+        f"{'max/step':>8} {'elements s':>10} {'assembly s':>10} {'linear s':>9} "
+        f"{'rest s':>7} {'total s':>8} {'not linear':>10} {'peak MB':>8}  result"
+    )
     rows = []
     with tempfile.TemporaryDirectory(prefix="scale-") as scratch:
         for problem in args.problems:
@@ -230,13 +303,27 @@ def main() -> None:
                     continue
                 progress = Path(scratch) / f"{problem}-{n}.jsonl"
                 progress.write_text("")
-                command = [sys.executable, __file__, "--one", problem, str(n),
-                           "--linear-solver", args.linear_solver, "--progress", str(progress)]
+                command = [
+                    sys.executable,
+                    __file__,
+                    "--one",
+                    problem,
+                    str(n),
+                    "--linear-solver",
+                    args.linear_solver,
+                    "--progress",
+                    str(progress),
+                ]
                 if args.max_iterations:
                     command += ["--max-iterations", str(args.max_iterations)]
                 try:
-                    done = subprocess.run(command, capture_output=True, text=True, check=False,
-                                          timeout=args.time_limit)
+                    done = subprocess.run(
+                        command,
+                        capture_output=True,
+                        text=True,
+                        check=False,
+                        timeout=args.time_limit,
+                    )
                 except subprocess.TimeoutExpired:
                     row = stopped_row(progress, args.time_limit)
                     if row is None:

@@ -58,18 +58,44 @@ from table import write_csv
 ROOT = Path(__file__).resolve().parents[1]
 CASE = ROOT / "examples" / "airbag.toml"
 KRATOS_SCRIPT = Path(__file__).resolve().parent / "kratos_airbag.py"
-KRATOS_PACKAGES = ["KratosMultiphysics==10.4.*", "KratosStructuralMechanicsApplication==10.4.*",
-                   "KratosConstitutiveLawsApplication==10.4.*", "numpy"]
-KRATOS_IMPORTS = ("import KratosMultiphysics, KratosMultiphysics.StructuralMechanicsApplication, "
-                  "KratosMultiphysics.ConstitutiveLawsApplication, "
-                  "KratosMultiphysics.LinearSolversApplication, numpy")
-FIELDS = ["n", "elements", "unknowns", "wrinkle_iterations", "wrinkle_s", "wrinkle_mm",
-          "wrinkle_converged",
-          "kratos_law", "kratos_iterations", "kratos_s", "kratos_mm", "kratos_converged",
-          "ratio", "kratos_minus_wrinkle_mm", "wrinkle_solve_s", "kratos_solve_s",
-          "wrinkle_ms_per_iteration", "kratos_ms_per_iteration", "kratos_ramp_iterations",
-          "kratos_release_iterations", "kratos_spring_force_n", "kratos_linear_solver",
-          "kratos_error", "kratos_path", "threads"]
+KRATOS_PACKAGES = [
+    "KratosMultiphysics==10.4.*",
+    "KratosStructuralMechanicsApplication==10.4.*",
+    "KratosConstitutiveLawsApplication==10.4.*",
+    "numpy",
+]
+KRATOS_IMPORTS = (
+    "import KratosMultiphysics, KratosMultiphysics.StructuralMechanicsApplication, "
+    "KratosMultiphysics.ConstitutiveLawsApplication, "
+    "KratosMultiphysics.LinearSolversApplication, numpy"
+)
+FIELDS = [
+    "n",
+    "elements",
+    "unknowns",
+    "wrinkle_iterations",
+    "wrinkle_s",
+    "wrinkle_mm",
+    "wrinkle_converged",
+    "kratos_law",
+    "kratos_iterations",
+    "kratos_s",
+    "kratos_mm",
+    "kratos_converged",
+    "ratio",
+    "kratos_minus_wrinkle_mm",
+    "wrinkle_solve_s",
+    "kratos_solve_s",
+    "wrinkle_ms_per_iteration",
+    "kratos_ms_per_iteration",
+    "kratos_ramp_iterations",
+    "kratos_release_iterations",
+    "kratos_spring_force_n",
+    "kratos_linear_solver",
+    "kratos_error",
+    "kratos_path",
+    "threads",
+]
 
 
 def kratos_python(venv: Path) -> Path:
@@ -78,12 +104,12 @@ def kratos_python(venv: Path) -> Path:
     if not python.exists():
         print(f"creating the Kratos environment {venv}", flush=True)
         subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
-    found = subprocess.run([str(python), "-c", KRATOS_IMPORTS], capture_output=True,
-                           check=False)
+    found = subprocess.run([str(python), "-c", KRATOS_IMPORTS], capture_output=True, check=False)
     if found.returncode:
         print(f"installing {' '.join(KRATOS_PACKAGES)} into {venv}", flush=True)
-        subprocess.run([str(python), "-m", "pip", "install", "--quiet", *KRATOS_PACKAGES],
-                       check=True)
+        subprocess.run(
+            [str(python), "-m", "pip", "install", "--quiet", *KRATOS_PACKAGES], check=True
+        )
     return python
 
 
@@ -99,11 +125,18 @@ def write_problem(n: int, directory: Path) -> Path:
         raise ValueError(f"{CASE} is no longer an St Venant-Kirchhoff sheet under one pressure")
     model = read_case(CASE, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}})
     path = directory / f"airbag_{n}.npz"
-    np.savez(path, nodes=model.mesh.nodes, triangles=model.mesh.triangles,
-             held=model.constrained.reshape(-1, 3), centre=model.probes["centre"],
-             young_modulus=material["E"], poisson_ratio=material["nu"],
-             thickness=material["thickness"], pressure=load["value"],
-             tolerance=case["solver"]["tolerance"])
+    np.savez(
+        path,
+        nodes=model.mesh.nodes,
+        triangles=model.mesh.triangles,
+        held=model.constrained.reshape(-1, 3),
+        centre=model.probes["centre"],
+        young_modulus=material["E"],
+        poisson_ratio=material["nu"],
+        thickness=material["thickness"],
+        pressure=load["value"],
+        tolerance=case["solver"]["tolerance"],
+    )
     return path
 
 
@@ -114,15 +147,18 @@ def timed_runs(command: list[str], repeats: int, time_limit: float, env: dict) -
     for _ in range(repeats):
         start = time.perf_counter()
         try:
-            done = subprocess.run(command, capture_output=True, text=True, timeout=time_limit,
-                                  env=env, check=False)
+            done = subprocess.run(
+                command, capture_output=True, text=True, timeout=time_limit, env=env, check=False
+            )
         except subprocess.TimeoutExpired:
             return {"error": f"over the time limit of {time_limit:.0f} s", "wall_s": time_limit}
         walls.append(time.perf_counter() - start)
         lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
         if done.returncode != 0 or not lines:
-            return {"error": (done.stderr or done.stdout).strip()[-500:] or "no output",
-                    "wall_s": walls[-1]}
+            return {
+                "error": (done.stderr or done.stdout).strip()[-500:] or "no output",
+                "wall_s": walls[-1],
+            }
         row = json.loads(lines[-1])
     row["wall_s"] = statistics.median(walls)
     return row
@@ -130,8 +166,12 @@ def timed_runs(command: list[str], repeats: int, time_limit: float, env: dict) -
 
 def compare(n: int, problem: Path, python: Path, args, env: dict) -> dict:
     """One row of the table: wrinkle and Kratos on the n x n airbag."""
-    wrinkle = timed_runs([sys.executable, str(ROOT / "benchmarks" / "scale.py"), "--one",
-                          "airbag", str(n)], args.repeats, args.time_limit, env)
+    wrinkle = timed_runs(
+        [sys.executable, str(ROOT / "benchmarks" / "scale.py"), "--one", "airbag", str(n)],
+        args.repeats,
+        args.time_limit,
+        env,
+    )
     kratos_command = [str(python), str(KRATOS_SCRIPT), str(problem), *args.kratos_options]
     laws = ["wrinkling", "linear"] if args.law == "auto" else [args.law]
     for law in laws:
@@ -140,32 +180,45 @@ def compare(n: int, problem: Path, python: Path, args, env: dict) -> dict:
         if kratos.get("converged"):
             break
     converged = bool(kratos.get("converged"))
-    row = {"n": n, "elements": 2 * n * n, "unknowns": kratos.get("unknowns"),
-           "threads": args.threads, "kratos_law": kratos["law"],
-           "kratos_converged": converged, "kratos_s": kratos["wall_s"],
-           "kratos_error": kratos.get("error", ""),
-           "kratos_linear_solver": kratos.get("linear_solver", "")}
+    row = {
+        "n": n,
+        "elements": 2 * n * n,
+        "unknowns": kratos.get("unknowns"),
+        "threads": args.threads,
+        "kratos_law": kratos["law"],
+        "kratos_converged": converged,
+        "kratos_s": kratos["wall_s"],
+        "kratos_error": kratos.get("error", ""),
+        "kratos_linear_solver": kratos.get("linear_solver", ""),
+    }
     if "error" in wrinkle:
         print(f"n = {n}: wrinkle failed: {wrinkle['error']}", flush=True)
     else:
-        row.update({
-            "unknowns": wrinkle["unknowns"], "wrinkle_iterations": wrinkle["iterations"],
-            "wrinkle_s": wrinkle["wall_s"], "wrinkle_mm": wrinkle["result"],
-            "wrinkle_solve_s": wrinkle["total_s"],
-            "wrinkle_ms_per_iteration": 1e3 * wrinkle["total_s"] / wrinkle["iterations"],
-            "wrinkle_converged": wrinkle.get("converged", True),
-        })
+        row.update(
+            {
+                "unknowns": wrinkle["unknowns"],
+                "wrinkle_iterations": wrinkle["iterations"],
+                "wrinkle_s": wrinkle["wall_s"],
+                "wrinkle_mm": wrinkle["result"],
+                "wrinkle_solve_s": wrinkle["total_s"],
+                "wrinkle_ms_per_iteration": 1e3 * wrinkle["total_s"] / wrinkle["iterations"],
+                "wrinkle_converged": wrinkle.get("converged", True),
+            }
+        )
         if not row["wrinkle_converged"]:
             print(f"n = {n}: wrinkle did not converge", flush=True)
     if "iterations" in kratos:
-        row.update({
-            "kratos_iterations": kratos["iterations"], "kratos_mm": kratos["deflection_mm"],
-            "kratos_solve_s": kratos["solve_s"],
-            "kratos_ramp_iterations": kratos["ramp_iterations"],
-            "kratos_release_iterations": kratos["release_iterations"],
-            "kratos_spring_force_n": kratos["spring_force_n"],
-            "kratos_ms_per_iteration": 1e3 * kratos["solve_s"] / max(kratos["iterations"], 1),
-        })
+        row.update(
+            {
+                "kratos_iterations": kratos["iterations"],
+                "kratos_mm": kratos["deflection_mm"],
+                "kratos_solve_s": kratos["solve_s"],
+                "kratos_ramp_iterations": kratos["ramp_iterations"],
+                "kratos_release_iterations": kratos["release_iterations"],
+                "kratos_spring_force_n": kratos["spring_force_n"],
+                "kratos_ms_per_iteration": 1e3 * kratos["solve_s"] / max(kratos["iterations"], 1),
+            }
+        )
     if "ramp_steps" in kratos:
         row["kratos_path"] = (
             f"ramp: {kratos['ramp_steps']} steps, prestress {kratos['prestress_pa']:g} Pa, "
@@ -173,7 +226,8 @@ def compare(n: int, problem: Path, python: Path, args, env: dict) -> dict:
             f" iterations; release: {kratos['release_steps']} step(s), seam springs "
             f"{kratos['release_spring_n_per_m']:g} N/m, {kratos.get('release_iterations')} "
             f"iterations, largest spring force left {kratos.get('spring_force_n', 0.0):.2g} N; "
-            f"{kratos['linear_solver']}")
+            f"{kratos['linear_solver']}"
+        )
     if converged and row.get("wrinkle_converged"):
         row["ratio"] = row["wrinkle_s"] / row["kratos_s"]
         row["kratos_minus_wrinkle_mm"] = row["kratos_mm"] - row["wrinkle_mm"]
@@ -188,40 +242,59 @@ def cell(row: dict, key: str, form: str, width: int) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sizes", type=int, nargs="+", default=[16, 32],
-                        help="squares per side n (2 n^2 triangles); n = 32: 2,048 elements")
+    parser.add_argument(
+        "--sizes",
+        type=int,
+        nargs="+",
+        default=[16, 32],
+        help="squares per side n (2 n^2 triangles); n = 32: 2,048 elements",
+    )
     parser.add_argument("--csv", default="vs_kratos.csv")
-    parser.add_argument("--kratos-venv", type=Path,
-                        default=Path.home() / ".cache" / "wrinkle" / "kratos-venv")
+    parser.add_argument(
+        "--kratos-venv", type=Path, default=Path.home() / ".cache" / "wrinkle" / "kratos-venv"
+    )
     parser.add_argument("--repeats", type=int, default=1, help="runs per code and mesh")
     parser.add_argument("--time-limit", type=float, default=1800.0, help="per run, s")
     parser.add_argument("--threads", type=int, default=1, help="OpenMP/BLAS threads, both codes")
-    parser.add_argument("--law", choices=["wrinkling", "linear", "auto"], default="wrinkling",
-                        help="Kratos law; auto: linear where wrinkling does not converge")
-    parser.add_argument("--kratos-options", type=shlex.split, default=[],
-                        help='passed on to kratos_airbag.py, e.g. "--ramp-steps 5"')
+    parser.add_argument(
+        "--law",
+        choices=["wrinkling", "linear", "auto"],
+        default="wrinkling",
+        help="Kratos law; auto: linear where wrinkling does not converge",
+    )
+    parser.add_argument(
+        "--kratos-options",
+        type=shlex.split,
+        default=[],
+        help='passed on to kratos_airbag.py, e.g. "--ramp-steps 5"',
+    )
     args = parser.parse_args()
 
     python = kratos_python(args.kratos_venv)
     env = dict(os.environ)
     for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         env[name] = str(args.threads)
-    header = (f"{'n':>4} {'elements':>8} {'unknowns':>8} | {'w iter':>6} {'w s':>7} "
-              f"{'w mm':>9} | {'Kratos law':>10} {'K iter':>6} {'K s':>8} {'K mm':>9} "
-              f"{'conv':>5} | {'w/K':>6}")
+    header = (
+        f"{'n':>4} {'elements':>8} {'unknowns':>8} | {'w iter':>6} {'w s':>7} "
+        f"{'w mm':>9} | {'Kratos law':>10} {'K iter':>6} {'K s':>8} {'K mm':>9} "
+        f"{'conv':>5} | {'w/K':>6}"
+    )
     print(header, flush=True)
     rows = []
     with tempfile.TemporaryDirectory() as scratch:
         for n in args.sizes:
             row = compare(n, write_problem(n, Path(scratch)), python, args, env)
             rows.append(row)
-            print(f"{row['n']:4d} {row['elements']:8d} {cell(row, 'unknowns', 'd', 8)} | "
-                  f"{cell(row, 'wrinkle_iterations', 'd', 6)} {cell(row, 'wrinkle_s', '.2f', 7)} "
-                  f"{cell(row, 'wrinkle_mm', '.3f', 9)} | {row['kratos_law']:>10} "
-                  f"{cell(row, 'kratos_iterations', 'd', 6)} {cell(row, 'kratos_s', '.1f', 8)} "
-                  f"{cell(row if row['kratos_converged'] else {}, 'kratos_mm', '.3f', 9)} "
-                  f"{row['kratos_converged']!s:>5} | "
-                  f"{cell(row, 'ratio', '.4f', 6)}", flush=True)
+            print(
+                f"{row['n']:4d} {row['elements']:8d} {cell(row, 'unknowns', 'd', 8)} | "
+                f"{cell(row, 'wrinkle_iterations', 'd', 6)} {cell(row, 'wrinkle_s', '.2f', 7)} "
+                f"{cell(row, 'wrinkle_mm', '.3f', 9)} | {row['kratos_law']:>10} "
+                f"{cell(row, 'kratos_iterations', 'd', 6)} {cell(row, 'kratos_s', '.1f', 8)} "
+                f"{cell(row if row['kratos_converged'] else {}, 'kratos_mm', '.3f', 9)} "
+                f"{row['kratos_converged']!s:>5} | "
+                f"{cell(row, 'ratio', '.4f', 6)}",
+                flush=True,
+            )
             if row.get("kratos_path"):
                 print(f"     Kratos {row['kratos_path']}", flush=True)
             if row["kratos_error"]:

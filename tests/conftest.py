@@ -34,26 +34,33 @@ def material_cases() -> list[MaterialCase]:
     D0 = REFERENCE_THICKNESS
     return [
         MaterialCase(
-            "svk_isotropic", StVenantKirchhoff.isotropic(E=2.0, nu=0.3, thickness=D0),
-            (1.0, 0.0, 0.0), 0.0,
+            "svk_isotropic",
+            StVenantKirchhoff.isotropic(E=2.0, nu=0.3, thickness=D0),
+            (1.0, 0.0, 0.0),
+            0.0,
         ),
         MaterialCase(
             "svk_transversely_isotropic",
             StVenantKirchhoff.transversely_isotropic(
                 E_L=5.0, E_T=1.0, nu_LT=0.3, nu_TT=0.3, G_LT=1.0 / 2.6, thickness=D0
             ),
-            (1.0, 0.5, 0.2), 0.4,  # off-axis fibres: about 0.86 rad from the x axis
+            (1.0, 0.5, 0.2),
+            0.4,  # off-axis fibres: about 0.86 rad from the x axis
         ),
         MaterialCase(
-            "svk_general", StVenantKirchhoff(random_spd_stiffness(), thickness=D0),
-            (0.3, 1.0, 0.0), -0.3,
+            "svk_general",
+            StVenantKirchhoff(random_spd_stiffness(), thickness=D0),
+            (0.3, 1.0, 0.0),
+            -0.3,
         ),
         MaterialCase(
             "neo_hookean_incompressible", NeoHookean(mu=1.5, thickness=D0), (1.0, 0.0, 0.0), 0.0
         ),
         MaterialCase(
-            "neo_hookean_compressible", NeoHookean(mu=1.5, thickness=D0, lmbda=4.0),
-            (0.0, 1.0, 0.0), 0.7,
+            "neo_hookean_compressible",
+            NeoHookean(mu=1.5, thickness=D0, lmbda=4.0),
+            (0.0, 1.0, 0.0),
+            0.7,
         ),
     ]
 

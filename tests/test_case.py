@@ -34,7 +34,10 @@ def write(tmp_path, text):
 
 
 def test_solver_table_becomes_settings(tmp_path):
-    path = write(tmp_path, CASE + """
+    path = write(
+        tmp_path,
+        CASE
+        + """
 [solver]
 steps = 4
 min_step = 0.01
@@ -43,23 +46,34 @@ cutback = 0.25
 growth = 1.5
 target_iterations = 3
 tolerance = 1e-9
-""")
+""",
+    )
     case = read_case(path)
-    assert case.settings == SolverSettings(steps=4, min_step=0.01, max_step=0.5, cutback=0.25,
-                                           growth=1.5, target_iterations=3, tolerance=1e-9)
+    assert case.settings == SolverSettings(
+        steps=4,
+        min_step=0.01,
+        max_step=0.5,
+        cutback=0.25,
+        growth=1.5,
+        target_iterations=3,
+        tolerance=1e-9,
+    )
     assert case.title == "pulled sheet" and case.source == path
     assert case.units == {"length": "m", "force": "N"}
 
 
-@pytest.mark.parametrize("line, fragment", [
-    ("cutback = 1.5", "[solver]: solver cutback must be a number in (0, 1), got 1.5"),
-    ("growth = 0.5", "[solver]: solver growth must be a number >= 1, got 0.5"),
-    ("max_step = 2.0", "[solver]: solver max_step must be a number in [min_step, 1]"),
-    ("target_iterations = 2.5", "[solver]: 'target_iterations' must be an integer"),
-    ("cutback = -1", "[solver]: 'cutback' must be > 0"),
-    ("steps = 0", "[solver]: 'steps' must be >= 1"),
-    ("step = 3", "[solver]: unknown key 'step'"),
-])
+@pytest.mark.parametrize(
+    "line, fragment",
+    [
+        ("cutback = 1.5", "[solver]: solver cutback must be a number in (0, 1), got 1.5"),
+        ("growth = 0.5", "[solver]: solver growth must be a number >= 1, got 0.5"),
+        ("max_step = 2.0", "[solver]: solver max_step must be a number in [min_step, 1]"),
+        ("target_iterations = 2.5", "[solver]: 'target_iterations' must be an integer"),
+        ("cutback = -1", "[solver]: 'cutback' must be > 0"),
+        ("steps = 0", "[solver]: 'steps' must be >= 1"),
+        ("step = 3", "[solver]: unknown key 'step'"),
+    ],
+)
 def test_bad_solver_keys(tmp_path, line, fragment):
     path = write(tmp_path, CASE + f"\n[solver]\n{line}\n")
     with pytest.raises(CaseError) as caught:
@@ -70,10 +84,15 @@ def test_bad_solver_keys(tmp_path, line, fragment):
 
 def test_disk_rejects_inner_radius(tmp_path):
     """A disk has no hole: the key that was silently dropped is refused, naming annulus."""
-    disk = CASE.replace("rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}",
-                        "disk = {outer_radius = 1.0, inner_radius = 0.5, n_radial = 3, "
-                        "n_circumferential = 12}").replace('"y == 0"', '"r == 1"').replace(
-        '"y == 1"', '"x == 0 and y == 0"').replace('"x == 1 and y == 1"', '"x == 0 and y == 0"')
+    disk = (
+        CASE.replace(
+            "rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}",
+            "disk = {outer_radius = 1.0, inner_radius = 0.5, n_radial = 3, n_circumferential = 12}",
+        )
+        .replace('"y == 0"', '"r == 1"')
+        .replace('"y == 1"', '"x == 0 and y == 0"')
+        .replace('"x == 1 and y == 1"', '"x == 0 and y == 0"')
+    )
     with pytest.raises(CaseError, match=r"\[mesh\] disk: a disk has no 'inner_radius'.*annulus"):
         read_case(write(tmp_path, disk))
     nodes = read_case(write(tmp_path, disk.replace("inner_radius = 0.5, ", ""))).model.mesh.nodes
@@ -106,8 +125,13 @@ def test_case_solve_and_run(tmp_path):
 
 
 def test_failed_case_solve_keeps_the_labelled_steps(tmp_path):
-    case = read_case(write(tmp_path, CASE.replace("[0.05, 0.02, 0.0]", "[0.3, 0.01, 0.0]")
-                           + "\n[solver]\nsteps = 4\nmax_iterations = 3\nmin_step = 0.2\n"))
+    case = read_case(
+        write(
+            tmp_path,
+            CASE.replace("[0.05, 0.02, 0.0]", "[0.3, 0.01, 0.0]")
+            + "\n[solver]\nsteps = 4\nmax_iterations = 3\nmin_step = 0.2\n",
+        )
+    )
     with pytest.raises(wrinkle.ConvergenceError) as caught:
         case.solve()
     assert caught.value.results.probes is case.probes

@@ -30,8 +30,13 @@ def random_element_data(m: int, seed: int = 0):
     a symmetric stress (m, 2, 2), all random."""
     rng = np.random.default_rng(seed)
     stress = rng.normal(size=(m, 2, 2))
-    return (rng.uniform(0.1, 1.0, m), rng.normal(size=(m, 3, 2)), rng.normal(size=(m, 3, 2)),
-            rng.normal(size=(m, 3, 3)), stress + stress.transpose(0, 2, 1))
+    return (
+        rng.uniform(0.1, 1.0, m),
+        rng.normal(size=(m, 3, 2)),
+        rng.normal(size=(m, 3, 2)),
+        rng.normal(size=(m, 3, 3)),
+        stress + stress.transpose(0, 2, 1),
+    )
 
 
 @needs_numba
@@ -83,12 +88,17 @@ def test_airbag_evaluation_same_with_and_without_compiled_kernels(monkeypatch):
     numpy_ev, compiled_ev = evaluations["0"], evaluations["1"]
     taut, wrinkled, slack = compiled_ev.states
     assert taut > 0 and wrinkled > 0 and slack > 0, compiled_ev.states
-    np.testing.assert_allclose(compiled_ev.residual, numpy_ev.residual, rtol=0,
-                               atol=1e-12 * np.abs(numpy_ev.residual).max())
+    np.testing.assert_allclose(
+        compiled_ev.residual,
+        numpy_ev.residual,
+        rtol=0,
+        atol=1e-12 * np.abs(numpy_ev.residual).max(),
+    )
     K, K_numpy = compiled_ev.stiffness, numpy_ev.stiffness
     np.testing.assert_array_equal(K.indices, K_numpy.indices)
-    np.testing.assert_allclose(K.data, K_numpy.data, rtol=0,
-                               atol=1e-12 * np.abs(K_numpy.data).max())
+    np.testing.assert_allclose(
+        K.data, K_numpy.data, rtol=0, atol=1e-12 * np.abs(K_numpy.data).max()
+    )
     assert compiled_ev.energy == pytest.approx(numpy_ev.energy, rel=1e-13)
 
 
@@ -132,5 +142,6 @@ def test_wrinkled_tangent_equals_numpy_formula():
     _, _, _, D, stress = random_element_data(101, seed=6)
     wrinkling = Wrinkling(StVenantKirchhoff.isotropic(E=1.0, nu=0.3, thickness=1.0))
     arguments = (np.cos(phi), np.sin(phi), b, stress, D)
-    np.testing.assert_array_equal(compiled.wrinkled_tangent(*arguments),
-                                  wrinkling._wrinkled_tangent(*arguments))
+    np.testing.assert_array_equal(
+        compiled.wrinkled_tangent(*arguments), wrinkling._wrinkled_tangent(*arguments)
+    )

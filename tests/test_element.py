@@ -116,7 +116,9 @@ def total_energy(model: Model, u: np.ndarray) -> float:
     x = MESH.nodes + u.reshape(-1, 3)
     geometry = model.discretise().elements.geometry
     F = deformation_gradient(element_coordinates(x, MESH.triangles), geometry.shape_gradient)
-    return float(np.sum(geometry.area * model.discretise().elements.material.energy(right_cauchy_green(F))))
+    return float(
+        np.sum(geometry.area * model.discretise().elements.material.energy(right_cauchy_green(F)))
+    )
 
 
 # --------------------------------------------------------------------------- stiffness
@@ -284,7 +286,13 @@ def test_unit_tension_stiffness_is_the_dirichlet_energy():
     F = np.zeros((g.n_elements, 3, 2))
     F[:, :2, :] = np.eye(2)
     B = strain_displacement(F, g.shape_gradient)
-    geometric = element_stiffness(g.area, B, np.zeros((g.n_elements, 3, 3)), g.shape_gradient,
-                                  np.tile(np.eye(2), (g.n_elements, 1, 1)))
-    np.testing.assert_allclose(unit_tension_stiffness(g.area, g.shape_gradient), geometric,
-                               atol=1e-14)
+    geometric = element_stiffness(
+        g.area,
+        B,
+        np.zeros((g.n_elements, 3, 3)),
+        g.shape_gradient,
+        np.tile(np.eye(2), (g.n_elements, 1, 1)),
+    )
+    np.testing.assert_allclose(
+        unit_tension_stiffness(g.area, g.shape_gradient), geometric, atol=1e-14
+    )

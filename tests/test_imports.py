@@ -13,8 +13,7 @@ import wrinkle
 
 PACKAGE = Path(wrinkle.__file__).parent
 MODULES = sorted(
-    "wrinkle." + ".".join(path.relative_to(PACKAGE).with_suffix("").parts).removesuffix(
-        ".__init__")
+    "wrinkle." + ".".join(path.relative_to(PACKAGE).with_suffix("").parts).removesuffix(".__init__")
     for path in PACKAGE.rglob("*.py")
 )
 MODULES = [name.removesuffix(".__init__") for name in MODULES]
@@ -33,8 +32,9 @@ def _type_checking_only(node: ast.AST) -> bool:
 def _imports(name: str) -> set[str]:
     """wrinkle modules that ``name`` imports at run time (at top level or in a function)."""
     tree = ast.parse(_module_path(name).read_text())
-    skipped = {id(n) for block in ast.walk(tree) if _type_checking_only(block)
-               for n in ast.walk(block)}
+    skipped = {
+        id(n) for block in ast.walk(tree) if _type_checking_only(block) for n in ast.walk(block)
+    }
     found = set()
     for node in ast.walk(tree):
         if id(node) in skipped:
@@ -63,7 +63,7 @@ def test_no_import_cycle():
         path.append(node)
         for target in sorted(graph[node]):
             if state.get(target) == 1:
-                cycle = path[path.index(target):] + [target]
+                cycle = path[path.index(target) :] + [target]
                 pytest.fail("import cycle: " + " -> ".join(cycle))
             if target not in state:
                 visit(target)
@@ -85,7 +85,11 @@ def test_each_module_imports_alone(name):
 @pytest.mark.parametrize("name", MODULES)
 def test_module_declares_all(name):
     tree = ast.parse(_module_path(name).read_text())
-    names = {t.id for node in tree.body if isinstance(node, ast.Assign | ast.AnnAssign)
-             for t in (node.targets if isinstance(node, ast.Assign) else [node.target])
-             if isinstance(t, ast.Name)}
+    names = {
+        t.id
+        for node in tree.body
+        if isinstance(node, ast.Assign | ast.AnnAssign)
+        for t in (node.targets if isinstance(node, ast.Assign) else [node.target])
+        if isinstance(t, ast.Name)
+    }
     assert "__all__" in names, f"{name} has no __all__"

@@ -108,9 +108,7 @@ def test_shape_gradients_partition_unity_and_reproduce_linear_fields(triangles):
     rng = np.random.default_rng(2)
     a, d = rng.normal(size=3), rng.normal()
     phi = nodes[tri] @ a + d  # (n, 3)
-    assert np.allclose(
-        np.einsum("nk,nka->na", phi, grad), geometry.frame @ a, rtol=0.0, atol=1e-13
-    )
+    assert np.allclose(np.einsum("nk,nka->na", phi, grad), geometry.frame @ a, rtol=0.0, atol=1e-13)
     # and the 3-D gradient of psi_k, sum_a grad_ka A_a, gives Kronecker deltas at the nodes
     grad3 = np.einsum("nka,nai->nki", grad, geometry.frame)
     X = nodes[tri]
@@ -200,8 +198,12 @@ def test_zero_area_element_is_named(bad_corners):
 def test_fibre_perpendicular_to_element_is_named():
     nodes = np.array(
         [
-            [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0],  # element 0: xy plane
-            [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0],  # element 1: yz plane
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],  # element 0: xy plane
+            [0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],  # element 1: yz plane
         ]
     )
     tri = np.array([[0, 1, 2], [3, 4, 5]])

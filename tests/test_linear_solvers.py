@@ -15,7 +15,6 @@ import scipy.sparse as sp
 from wrinkle.case import CaseError, read_case
 from wrinkle.solvers import make_solver
 from wrinkle.solvers.base import shifted
-from wrinkle.solvers.newton import RegularisedNewton
 from wrinkle.solvers.linear import (
     AUTO_PARDISO_DOFS,
     LINEAR_SOLVERS,
@@ -25,6 +24,7 @@ from wrinkle.solvers.linear import (
     make_linear_solver,
     upper_triangle_positions,
 )
+from wrinkle.solvers.newton import RegularisedNewton
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 AIRBAG = EXAMPLES / "airbag.toml"
@@ -39,9 +39,12 @@ def installed(name: str) -> bool:
     return True
 
 
-BACKENDS = [pytest.param(name, marks=pytest.mark.skipif(not installed(name),
-                                                       reason=f"{name} not installed"))
-            for name in LINEAR_SOLVERS]
+BACKENDS = [
+    pytest.param(
+        name, marks=pytest.mark.skipif(not installed(name), reason=f"{name} not installed")
+    )
+    for name in LINEAR_SOLVERS
+]
 
 
 def spd_matrix(n: int = 60, seed: int = 3) -> sp.csr_matrix:
@@ -92,8 +95,9 @@ def test_symmetry_check_and_upper_triangle():
     check = SymmetryCheck()
     assert check(A)
     B = A.copy()
-    off_diagonal = np.flatnonzero(np.repeat(np.arange(B.shape[0]), np.diff(B.indptr))
-                                  != B.indices)[0]
+    off_diagonal = np.flatnonzero(np.repeat(np.arange(B.shape[0]), np.diff(B.indptr)) != B.indices)[
+        0
+    ]
     B.data[off_diagonal] *= 1.0 + 1e-15  # round-off: still symmetric
     assert check(B)
     B.data[off_diagonal] *= 1.0 + 1e-6
@@ -194,7 +198,7 @@ def test_auto_and_unknown_names(monkeypatch):
         return real_import(name, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "__import__", no_pypardiso)
-    with pytest.raises(ImportError, match=r'needs pypardiso.*wrinkle\[fast\]'):
+    with pytest.raises(ImportError, match=r"needs pypardiso.*wrinkle\[fast\]"):
         make_linear_solver("pardiso")
     # "auto" never fails: without PARDISO a large problem falls back to SuperLU
     assert isinstance(make_linear_solver("auto", 10 * AUTO_PARDISO_DOFS), SuperLU)
@@ -234,8 +238,11 @@ def test_same_solution_with_every_backend(name, case):
     the same displacements with every back-end as with SuperLU. (A back-end that cannot
     factorise an indefinite tangent makes the regularisation grow, so the path may differ,
     not the solution.)"""
-    overrides = {"mesh": {"rectangle": {"nx": 8 if case == AIRBAG else 12,
-                                        "ny": 8 if case == AIRBAG else 12}}}
+    overrides = {
+        "mesh": {
+            "rectangle": {"nx": 8 if case == AIRBAG else 12, "ny": 8 if case == AIRBAG else 12}
+        }
+    }
     reference = read_case(case, overrides).solve(linear_solver="superlu", tolerance=1e-10)
     result = read_case(case, overrides).solve(linear_solver=name, tolerance=1e-10)
     u, u_ref = result.final.displacement, reference.final.displacement
@@ -243,7 +250,9 @@ def test_same_solution_with_every_backend(name, case):
 
 
 def test_case_file_names_the_linear_solver(tmp_path):
-    text = AIRBAG.read_text().replace('method = "newton"', 'method = "newton"\nlinear_solver = "superlu"')
+    text = AIRBAG.read_text().replace(
+        'method = "newton"', 'method = "newton"\nlinear_solver = "superlu"'
+    )
     case = tmp_path / "airbag.toml"
     case.write_text(text)
     assert read_case(case).settings.linear_solver == "superlu"

@@ -83,7 +83,9 @@ def test_pressure_volume_gradient_is_pressure_force_on_closed_surface():
             plus, minus = nodes.copy(), nodes.copy()
             plus[node, i] += h
             minus[node, i] -= h
-            slope = (pressure_volume(plus[faces]).sum() - pressure_volume(minus[faces]).sum()) / (2 * h)
+            slope = (pressure_volume(plus[faces]).sum() - pressure_volume(minus[faces]).sum()) / (
+                2 * h
+            )
             assert forces[node, i] == pytest.approx(slope, rel=1e-7, abs=1e-9)
 
 
@@ -157,7 +159,9 @@ def test_model_stiffness_with_follower_loads_matches_finite_difference(monkeypat
     for j, dof in enumerate(free):
         du = np.zeros_like(u)
         du[dof] = h
-        fd[:, j] = -(problem.evaluate(u + du, False).residual - problem.evaluate(u - du, False).residual)[free] / (2 * h)
+        fd[:, j] = -(
+            problem.evaluate(u + du, False).residual - problem.evaluate(u - du, False).residual
+        )[free] / (2 * h)
     assert not problem.symmetric
     np.testing.assert_allclose(K[np.ix_(free, free)], fd, atol=1e-6 * np.abs(fd).max())
 
@@ -183,7 +187,8 @@ def test_pressure_on_some_elements_equals_element_by_element_sums(monkeypatch, n
         forces, _ = model.discretise().follower_forces(u, 1.0, stiffness=False, x_elements=given)
         np.testing.assert_allclose(forces, expected, rtol=1e-14, atol=1e-15)
         assert model.discretise().pressure_work(u, x_elements=given) == pytest.approx(
-            0.5 * pressure_volume(x[loaded]).sum(), rel=1e-14)
+            0.5 * pressure_volume(x[loaded]).sum(), rel=1e-14
+        )
     matrices = RNG.normal(size=(mesh.n_elements, 9, 9))
     subtracted = matrices.copy()
     model.discretise().subtract_pressure_stiffness(subtracted, x, slice(0, mesh.n_elements), 1.0)
@@ -244,8 +249,9 @@ def test_inflated_square_airbag_centre_deflection():
     assert reactions["seam"][2] == pytest.approx(-5000.0 * projected, rel=1e-7)
     # the step's reactions, taken from the solver's last evaluation, are the reactions
     # evaluated afresh at the converged displacements (internal minus follower forces)
-    np.testing.assert_array_equal(results.final.reactions,
-                                  model.discretise().reactions(results.final.displacement, 1.0))
+    np.testing.assert_array_equal(
+        results.final.reactions, model.discretise().reactions(results.final.displacement, 1.0)
+    )
 
 
 def test_supports_with_one_label_count_a_shared_component_once():
@@ -261,5 +267,6 @@ def test_supports_with_one_label_count_a_shared_component_once():
     model.add_nodal_force(top, (0.02, 0.05, 0.0))
     results = model.solve()
     reactions = model.support_reactions(results.final.reactions)
-    np.testing.assert_allclose(reactions["base"][:2], [-0.02 * top.size, -0.05 * top.size],
-                               rtol=1e-7)
+    np.testing.assert_allclose(
+        reactions["base"][:2], [-0.02 * top.size, -0.05 * top.size], rtol=1e-7
+    )

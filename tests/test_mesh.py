@@ -48,9 +48,13 @@ def test_rectangle(nx, ny, diagonal):
 
 def test_rectangle_diagonals():
     """Square 0-1-3-2 (2x2 nodes): 'right' splits along 0-3, 'left' along 1-2."""
+
     def edges(mesh):
-        return {tuple(sorted((int(t[a]), int(t[b])))) for t in mesh.triangles
-                for a, b in ((0, 1), (1, 2), (2, 0))}
+        return {
+            tuple(sorted((int(t[a]), int(t[b]))))
+            for t in mesh.triangles
+            for a, b in ((0, 1), (1, 2), (2, 0))
+        }
 
     assert (0, 3) in edges(rectangle(1.0, 1.0, 1, 1, "right"))
     assert (1, 2) in edges(rectangle(1.0, 1.0, 1, 1, "left"))
@@ -99,15 +103,29 @@ def test_valid_mesh_and_planar_nodes():
         (NODES, [[0.0, 1.0, 2.0]], "integer"),
         (NODES[:, :1], [[0, 1, 2]], r"\(n, 2\) or \(n, 3\)"),
         (np.ones((4, 3, 1)), [[0, 1, 2]], r"\(n, 2\) or \(n, 3\)"),
-        (np.where(np.arange(12).reshape(4, 3) == 7, np.nan, NODES), [[0, 1, 2]],
-         r"node 2 has a non-finite coordinate"),
-        (np.where(np.arange(12).reshape(4, 3) == 9, np.inf, NODES), [[0, 1, 2]],
-         r"node 3 has a non-finite coordinate"),
+        (
+            np.where(np.arange(12).reshape(4, 3) == 7, np.nan, NODES),
+            [[0, 1, 2]],
+            r"node 2 has a non-finite coordinate",
+        ),
+        (
+            np.where(np.arange(12).reshape(4, 3) == 9, np.inf, NODES),
+            [[0, 1, 2]],
+            r"node 3 has a non-finite coordinate",
+        ),
     ],
     ids=[
-        "node_out_of_range", "negative_node", "repeated_node", "duplicate_element",
-        "four_nodes_per_element", "flat_triangles", "float_indices", "one_coordinate",
-        "nodes_3d_array", "nan_coordinate", "inf_coordinate",
+        "node_out_of_range",
+        "negative_node",
+        "repeated_node",
+        "duplicate_element",
+        "four_nodes_per_element",
+        "flat_triangles",
+        "float_indices",
+        "one_coordinate",
+        "nodes_3d_array",
+        "nan_coordinate",
+        "inf_coordinate",
     ],
 )
 def test_mesh_validation_names_the_culprit(nodes, triangles, message):

@@ -28,9 +28,11 @@ POINTS = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [2.0, 0.0], [
 
 def write(tmp_path, name, points, cells, **kwargs):
     path = tmp_path / name
-    meshio.write(path, meshio.Mesh(points, cells, **kwargs), **(
-        {"file_format": "gmsh22", "binary": False} if name.endswith(".msh") else {}
-    ))
+    meshio.write(
+        path,
+        meshio.Mesh(points, cells, **kwargs),
+        **({"file_format": "gmsh22", "binary": False} if name.endswith(".msh") else {}),
+    )
     return path
 
 
@@ -46,8 +48,12 @@ def test_vtu_triangles_2d_points(tmp_path):
 
 def test_quads_are_split_along_first_diagonal(tmp_path):
     points = np.column_stack([POINTS, np.zeros(6)])
-    path = write(tmp_path, "mixed.vtu", points,
-                 [("triangle", [[0, 1, 2], [0, 2, 3]]), ("quad", [[1, 4, 5, 2]])])
+    path = write(
+        tmp_path,
+        "mixed.vtu",
+        points,
+        [("triangle", [[0, 1, 2], [0, 2, 3]]), ("quad", [[1, 4, 5, 2]])],
+    )
     mesh = read_mesh(path)
     # quad (a, b, c, d) -> (a, b, c), (a, c, d), after the triangles of the earlier block
     assert mesh.triangles.tolist() == [[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]]
@@ -65,14 +71,21 @@ GMSH_CELLS = [
 ]
 GMSH_PHYSICAL = [np.array([5]), np.array([1]), np.array([2]), np.array([10, 10]), np.array([11])]
 GMSH_FIELDS = {  # name: (physical tag, dimension); tag 1 would clash without the dimension
-    "corner": np.array([5, 0]), "left": np.array([1, 1]), "right": np.array([2, 1]),
-    "plate": np.array([10, 2]), "patch": np.array([11, 2]), "clash": np.array([1, 2]),
+    "corner": np.array([5, 0]),
+    "left": np.array([1, 1]),
+    "right": np.array([2, 1]),
+    "plate": np.array([10, 2]),
+    "patch": np.array([11, 2]),
+    "clash": np.array([1, 2]),
 }
 
 
 def test_gmsh22_physical_groups(tmp_path):
     path = write(
-        tmp_path, "groups.msh", GMSH_POINTS, GMSH_CELLS,
+        tmp_path,
+        "groups.msh",
+        GMSH_POINTS,
+        GMSH_CELLS,
         cell_data={"gmsh:physical": GMSH_PHYSICAL, "gmsh:geometrical": GMSH_PHYSICAL},
         field_data=GMSH_FIELDS,
     )
@@ -80,8 +93,12 @@ def test_gmsh22_physical_groups(tmp_path):
     assert mesh.n_nodes == 6 and mesh.n_elements == 4
     sets = {name: nodes.tolist() for name, nodes in mesh.node_sets.items()}
     assert sets == {
-        "corner": [0], "left": [0, 3], "right": [4, 5], "plate": [0, 1, 2, 3],
-        "patch": [1, 2, 4, 5], "clash": [],
+        "corner": [0],
+        "left": [0, 3],
+        "right": [4, 5],
+        "plate": [0, 1, 2, 3],
+        "patch": [1, 2, 4, 5],
+        "clash": [],
     }
     elements = {name: e.tolist() for name, e in mesh.element_sets.items()}
     assert elements == {"plate": [0, 1], "patch": [2, 3]}  # the quad's two triangles
@@ -139,7 +156,9 @@ def test_gmsh41_physical_groups_and_unused_node_dropped(tmp_path):
     assert mesh.nodes.tolist() == [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
     assert mesh.triangles.tolist() == [[0, 1, 2], [0, 2, 3]]
     assert {name: n.tolist() for name, n in mesh.node_sets.items()} == {
-        "origin": [0], "bottom": [0, 1], "plate": [0, 1, 2, 3],
+        "origin": [0],
+        "bottom": [0, 1],
+        "plate": [0, 1, 2, 3],
     }
     assert {name: e.tolist() for name, e in mesh.element_sets.items()} == {"plate": [0, 1]}
 
@@ -148,7 +167,10 @@ def test_abaqus_node_and_element_sets(tmp_path):
     points = np.column_stack([POINTS, np.zeros(6)])
     cells = [("triangle", np.array([[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]]))]
     path = write(
-        tmp_path, "plate.inp", points, cells,
+        tmp_path,
+        "plate.inp",
+        points,
+        cells,
         point_sets={"clamp": np.array([0, 3])},
         cell_sets={"right_half": [np.array([2, 3])]},
     )
@@ -170,14 +192,17 @@ def test_unused_node_is_dropped_and_sets_renumbered(tmp_path):
 @pytest.mark.parametrize(
     "cells, message",
     [
-        ([("triangle", [[0, 1, 2], [0, 1, 4]])],  # node 4 at (2, 0) lies on the line 0-1
-         r"element 1 \(nodes \[0, 1, 4\]\) has zero area"),
-        ([("triangle", [[0, 1, 2], [0, 2, 3], [2, 0, 1]])],
-         r"elements \[0, 2\] are duplicates"),
+        (
+            [("triangle", [[0, 1, 2], [0, 1, 4]])],  # node 4 at (2, 0) lies on the line 0-1
+            r"element 1 \(nodes \[0, 1, 4\]\) has zero area",
+        ),
+        ([("triangle", [[0, 1, 2], [0, 2, 3], [2, 0, 1]])], r"elements \[0, 2\] are duplicates"),
         ([("triangle", [[0, 1, 2], [3, 3, 1]])], r"element 1 repeats a node"),
         ([("line", [[0, 1], [1, 2]])], r"no triangles in the mesh \(cell types: line\)"),
-        ([("triangle6", [[0, 1, 2, 3, 4, 5]])],
-         r"cell type 'triangle6' is not supported; mesh with linear elements"),
+        (
+            [("triangle6", [[0, 1, 2, 3, 4, 5]])],
+            r"cell type 'triangle6' is not supported; mesh with linear elements",
+        ),
         ([("tetra", [[0, 1, 2, 3]])], r"cell type 'tetra' is not supported"),
     ],
     ids=["zero_area", "duplicate", "repeated_node", "no_triangles", "triangle6", "tetra"],
@@ -216,6 +241,7 @@ def test_unreadable_file(tmp_path, capfd, name, text, reason):
 
 # -- polar generators --------------------------------------------------------------------------
 
+
 def inscribed_polygon_area(radius: float, n: int) -> float:
     return n / 2 * radius**2 * math.sin(2 * math.pi / n)
 
@@ -248,7 +274,8 @@ def test_annulus(n_radial, n_circumferential):
     area = signed_areas(mesh)
     assert np.all(area > 0)
     expected = inscribed_polygon_area(b, n_circumferential) - inscribed_polygon_area(
-        a, n_circumferential)
+        a, n_circumferential
+    )
     assert area.sum() == pytest.approx(expected, rel=1e-13)
     r = np.hypot(mesh.nodes[:, 0], mesh.nodes[:, 1])
     assert set(mesh.node_sets) == {"inner", "outer"}
@@ -266,8 +293,9 @@ def test_polygon_area_converges_to_circle():
         errors.append(math.pi * (b**2 - a**2) - area)
     assert errors[0] / errors[1] == pytest.approx(4.0, rel=1e-2)
     assert errors[1] / errors[2] == pytest.approx(4.0, rel=1e-2)
-    assert errors[2] == pytest.approx(math.pi * (b**2 - a**2) * 2 * math.pi**2 / 3 / 64**2,
-                                      rel=1e-2)
+    assert errors[2] == pytest.approx(
+        math.pi * (b**2 - a**2) * 2 * math.pi**2 / 3 / 64**2, rel=1e-2
+    )
 
 
 @pytest.mark.parametrize(
@@ -291,6 +319,7 @@ def test_polar_generators_reject_bad_arguments(generator, args, message):
 
 
 # -- mesh_size and element sets ----------------------------------------------------------------
+
 
 def test_mesh_size_is_mean_edge_length():
     # 1 x 1 square in two triangles: four sides of 1 and one diagonal of sqrt(2)
@@ -326,7 +355,10 @@ def test_sets_are_checked(node_sets, element_sets, message):
 
 def test_without_meshio_the_message_says_what_to_install(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "meshio", None)  # import meshio fails
-    with pytest.raises(ImportError, match=r"meshio, which reads meshes and writes results, is missing: pip install meshio"):
+    with pytest.raises(
+        ImportError,
+        match=r"meshio, which reads meshes and writes results, is missing: pip install meshio",
+    ):
         read_mesh(tmp_path / "plate.msh")
 
 

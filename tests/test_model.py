@@ -79,5 +79,6 @@ def test_solve_with_selectors_equals_solve_with_indices():
     _, by_index = sheet()
     by_index.fix(mesh.node_sets["bottom"])
     by_index.prescribe(mesh.node_sets["top"], (0.02, 0.05, 0.0))
-    np.testing.assert_array_equal(by_name.solve().final.displacement,
-                                  by_index.solve().final.displacement)
+    np.testing.assert_array_equal(
+        by_name.solve().final.displacement, by_index.solve().final.displacement
+    )

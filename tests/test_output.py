@@ -96,8 +96,12 @@ def test_vtu_fields_hold_the_solution(solved, written):
         cell = {name: vtu.cell_data_dict[name]["triangle"] for name in vtu.cell_data}
         shapes = {name: value.shape for name, value in cell.items()}
         assert shapes == {
-            "state": (m,), "tension_direction": (m, 3), "wrinkle_direction": (m, 3),
-            "principal_stress": (m, 2), "wrinkling_strain": (m,), "thickness": (m,),
+            "state": (m,),
+            "tension_direction": (m, 3),
+            "wrinkle_direction": (m, 3),
+            "principal_stress": (m, 2),
+            "wrinkling_strain": (m,),
+            "thickness": (m,),
         }
         assert np.issubdtype(cell["state"].dtype, np.integer)
         report = element_report(model, step.displacement)
@@ -174,9 +178,25 @@ def test_history(solved, written):
     with open(written / "history.csv", newline="") as handle:
         header = next(csv.reader(handle))
     assert header == [
-        "step", "load_factor", "iterations", "residual", "taut", "wrinkled", "slack",
-        "bottom_Fx", "bottom_Fy", "bottom_Fz", "top_Fx", "top_Fy", "top_Fz",
-        "top_ux", "top_uy", "top_uz", "centre_ux", "centre_uy", "centre_uz",
+        "step",
+        "load_factor",
+        "iterations",
+        "residual",
+        "taut",
+        "wrinkled",
+        "slack",
+        "bottom_Fx",
+        "bottom_Fy",
+        "bottom_Fz",
+        "top_Fx",
+        "top_Fy",
+        "top_Fz",
+        "top_ux",
+        "top_uy",
+        "top_uz",
+        "centre_ux",
+        "centre_uy",
+        "centre_uz",
     ]
     rows = read_history(written)
     summary = read_summary(written)
@@ -226,7 +246,7 @@ def test_interruption_while_writing_keeps_the_previous_files(solved, tmp_path, m
     before = {name: (tmp_path / name).read_bytes() for name in WRITTEN}
 
     def interrupted_write(path, mesh, file_format=None, **kwargs):
-        Path(path).write_bytes(b"<?xml version=\"1.0\"?><VTKFile")  # half a file
+        Path(path).write_bytes(b'<?xml version="1.0"?><VTKFile')  # half a file
         raise KeyboardInterrupt
 
     monkeypatch.setattr(meshio, "write", interrupted_write)
@@ -260,8 +280,9 @@ def test_save_results_writes_every_step(solved, tmp_path, monkeypatch):
     assert summary["units"] == UNITS and "case" not in summary
     assert [f for _, f in collection(out)] == ["step_0001.vtu", "step_0002.vtu"]
     # as the method Results.save
-    monkeypatch.setattr(Results, "save", lambda self, d, **kw: save_results(self, d, **kw),
-                        raising=False)
+    monkeypatch.setattr(
+        Results, "save", lambda self, d, **kw: save_results(self, d, **kw), raising=False
+    )
     results.save(tmp_path / "method", units=UNITS)
     assert read_summary(tmp_path / "method")["steps"] == summary["steps"]
 
@@ -331,6 +352,8 @@ def test_without_meshio_the_message_says_what_to_install(solved, tmp_path, monke
     model, results = solved
     writer = ResultWriter(tmp_path, model)
     monkeypatch.setitem(sys.modules, "meshio", None)  # import meshio fails
-    with pytest.raises(ImportError, match=r"meshio, which reads meshes and writes results, is missing"):
+    with pytest.raises(
+        ImportError, match=r"meshio, which reads meshes and writes results, is missing"
+    ):
         writer.write_step(results.steps[0])
     assert {p.name for p in tmp_path.iterdir()} == WRITTEN

@@ -42,8 +42,11 @@ CASES = [
     ("x / 2 == y", SHEET, lambda x, y, z, r, t: close(x / 2, y)),
     ("2 ** -1 == x", SHEET, lambda x, y, z, r, t: close(x, 0.5)),
     ("-2 ** 2 == -4 and x == 0", SHEET, lambda x, y, z, r, t: close(x, 0)),  # as in Python
-    ("(x == 0 or x == 2) and not (y == 0)", SHEET,
-     lambda x, y, z, r, t: (close(x, 0) | close(x, 2)) & ~close(y, 0)),
+    (
+        "(x == 0 or x == 2) and not (y == 0)",
+        SHEET,
+        lambda x, y, z, r, t: (close(x, 0) | close(x, 2)) & ~close(y, 0),
+    ),
     ("z == 0.1 * x and x > 1", SHEET, lambda x, y, z, r, t: x > 1 + TOL),
     ("abs(x - 1) <= 0.25", SHEET, lambda x, y, z, r, t: np.abs(x - 1) <= 0.25 + TOL),
     ("sqrt(x) >= 1", SHEET, lambda x, y, z, r, t: np.sqrt(x) >= 1 - TOL),
@@ -53,13 +56,18 @@ CASES = [
     ("r == 0.5", RING, lambda x, y, z, r, t: close(r, 0.5)),
     ("r >= 1.25", RING, lambda x, y, z, r, t: r >= 1.25 - TOL),
     ("theta == pi / 2", RING, lambda x, y, z, r, t: close(t, np.pi / 2)),
-    ("0 <= theta <= pi/4 and r == 1.5", RING,
-     lambda x, y, z, r, t: (t >= -TOL) & (t <= np.pi / 4 + TOL) & close(r, 1.5)),
+    (
+        "0 <= theta <= pi/4 and r == 1.5",
+        RING,
+        lambda x, y, z, r, t: (t >= -TOL) & (t <= np.pi / 4 + TOL) & close(r, 1.5),
+    ),
     ("atan2(y, x) == theta", RING, lambda x, y, z, r, t: np.ones_like(x, dtype=bool)),
-    ("sin(theta) * r == y and cos(theta) * r == x", RING,
-     lambda x, y, z, r, t: np.ones_like(x, dtype=bool)),
-    ("tan(theta) >= 1 and x > 0", RING,
-     lambda x, y, z, r, t: (np.tan(t) >= 1 - TOL) & (x > TOL)),
+    (
+        "sin(theta) * r == y and cos(theta) * r == x",
+        RING,
+        lambda x, y, z, r, t: np.ones_like(x, dtype=bool),
+    ),
+    ("tan(theta) >= 1 and x > 0", RING, lambda x, y, z, r, t: (np.tan(t) >= 1 - TOL) & (x > TOL)),
 ]
 
 
@@ -100,8 +108,7 @@ def test_tolerance_relative_to_mesh_size():
     assert ge.tolist() == [2, 3, 4] and gt.tolist() == [3, 4]
     assert le.tolist() == [0, 1] and lt.tolist() == [0]
     # with zero tolerance the comparisons are exact
-    assert np.intersect1d(select_nodes(mesh, "x >= 0.5", tolerance=0.0), bottom).tolist() == [
-        3, 4]
+    assert np.intersect1d(select_nodes(mesh, "x >= 0.5", tolerance=0.0), bottom).tolist() == [3, 4]
 
 
 @pytest.mark.parametrize(
@@ -118,9 +125,14 @@ def test_tolerance_relative_to_mesh_size():
         ("and x == 0", r"unexpected 'and' at column 1"),
         ("", r'selector "": empty'),
         ("   ", r'selector "   ": empty'),
-        ("foo == 1", (r"unknown name 'foo' at column 1 \(allowed names: x, y, z, r, theta, pi, "
-                     r"sqrt, abs, sin, cos, tan, atan2, hypot; node sets: bottom, top, left, "
-                     r"right\)")),
+        (
+            "foo == 1",
+            (
+                r"unknown name 'foo' at column 1 \(allowed names: x, y, z, r, theta, pi, "
+                r"sqrt, abs, sin, cos, tan, atan2, hypot; node sets: bottom, top, left, "
+                r"right\)"
+            ),
+        ),
         ("topp", r"unknown name 'topp' at column 1 .*node sets: bottom, top"),
         ("__import__(x) == 0", r"unknown name '__import__' at column 1"),
         ("__import__('os')", r"unexpected \"'\" at column 12"),
@@ -136,8 +148,13 @@ def test_tolerance_relative_to_mesh_size():
         ("x == 5", r'^selector "x == 5" matches no node \(x spans 0 \.\. 2\)$'),
         ("y > 1 and x < 0", r"matches no node \(y spans 0 \.\. 1, x spans 0 \.\. 2\)$"),
         ("1 == 2", r'^selector "1 == 2" matches no node$'),
-        ("sqrt(x - 1) >= 0", (r"a comparison meets NaN \(not a number\) at node 0 "
-                             r"\(x = 0, y = 0, z = 0\)")),
+        (
+            "sqrt(x - 1) >= 0",
+            (
+                r"a comparison meets NaN \(not a number\) at node 0 "
+                r"\(x = 0, y = 0, z = 0\)"
+            ),
+        ),
     ],
 )
 def test_selector_errors(selector, message):
@@ -148,8 +165,11 @@ def test_selector_errors(selector, message):
 
 def test_empty_node_set_and_bad_arguments():
     mesh = Mesh(SHEET.nodes, SHEET.triangles, {"nothing": []})
-    with pytest.raises(ValueError, match=r'selector "nothing" matches no node '
-                                         r'\(node set "nothing" is empty\)'):
+    with pytest.raises(
+        ValueError,
+        match=r'selector "nothing" matches no node '
+        r'\(node set "nothing" is empty\)',
+    ):
         select_nodes(mesh, "nothing")
     with pytest.raises(ValueError, match="node sets: none"):
         select_nodes(Mesh(SHEET.nodes, SHEET.triangles), "left")
@@ -193,8 +213,13 @@ def test_evaluate_expression_values():
     "text, message",
     [
         ("0.1 * ", r'expression "0.1 \* ": unexpected end at column 7'),
-        ("y + q", (r"unknown name 'q' at column 5 \(allowed names: x, y, z, r, theta, pi, sqrt, "
-                  r"abs, sin, cos, tan, atan2, hypot\)$")),
+        (
+            "y + q",
+            (
+                r"unknown name 'q' at column 5 \(allowed names: x, y, z, r, theta, pi, sqrt, "
+                r"abs, sin, cos, tan, atan2, hypot\)$"
+            ),
+        ),
         ("1 / x", r'expression "1 / x" is inf at \(x = 0, y = 0, z = 0\)'),
         ("sqrt(x - 2)", r"is nan at \(x = 0, y = 0, z = 0\)"),
         (float("nan"), r"expression nan is not finite"),

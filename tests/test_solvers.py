@@ -121,8 +121,10 @@ def homogeneous_square(nx=6):
     model = wrinkle.Model(mesh, ANISOTROPIC)
     X = mesh.nodes
     boundary = np.flatnonzero((X[:, 0] % 1.0 == 0.0) | (X[:, 1] % 1.0 == 0.0))
-    model.prescribe(boundary, np.column_stack([0.1 * X[boundary, 1], 0.1 * X[boundary, 1],
-                                               np.zeros(boundary.size)]))
+    model.prescribe(
+        boundary,
+        np.column_stack([0.1 * X[boundary, 1], 0.1 * X[boundary, 1], np.zeros(boundary.size)]),
+    )
     homogeneous = np.column_stack([0.1 * X[:, 1], 0.1 * X[:, 1], np.zeros(len(X))]).ravel()
     return model, homogeneous
 
@@ -135,8 +137,7 @@ def test_load_steps_start_from_the_extrapolated_state():
     iterations = [step.iterations for step in results.steps]
     assert iterations[0] > 0 and iterations[1:] == [0, 0, 0, 0], iterations
     for step in results.steps:
-        np.testing.assert_allclose(step.displacement, step.load_factor * homogeneous,
-                                   atol=1e-10)
+        np.testing.assert_allclose(step.displacement, step.load_factor * homogeneous, atol=1e-10)
 
 
 def test_a_worse_prediction_is_not_used():
@@ -185,7 +186,8 @@ def test_a_start_in_balance_costs_no_stiffness():
     calls = []
     evaluate = problem.evaluate
     problem.evaluate = lambda u, stiffness=True, **options: (
-        calls.append(stiffness) or evaluate(u, stiffness, **options))
+        calls.append(stiffness) or evaluate(u, stiffness, **options)
+    )
     solver = make_solver("newton", tolerance=1e-10)
     balanced = problem.evaluate(homogeneous, stiffness=False)
     solved = solver.solve(problem, homogeneous, balanced)
@@ -207,7 +209,8 @@ def test_a_prediction_in_balance_costs_one_evaluation():
         problem = model.discretise().at(1.0)
         evaluate = problem.evaluate
         problem.evaluate = lambda u, stiffness=True, **options: (
-            calls.append(stiffness) or evaluate(u, stiffness, **options))
+            calls.append(stiffness) or evaluate(u, stiffness, **options)
+        )
         return problem
 
     solver = make_solver("newton", tolerance=1e-10)
@@ -240,7 +243,9 @@ def test_unsupported_model_is_rejected():
     mesh = wrinkle.rectangle(1.0, 1.0, 2, 2)
     model = wrinkle.Model(mesh, ANISOTROPIC)
     model.fix(mesh.node_sets["bottom"], "xy")
-    with pytest.raises(ValueError, match="do not prevent translation in z, rotation about x, rotation about y"):
+    with pytest.raises(
+        ValueError, match="do not prevent translation in z, rotation about x, rotation about y"
+    ):
         model.solve()
 
 
@@ -264,14 +269,16 @@ def test_newton_regularises_in_the_unit_tension_metric():
     expected = K.copy()
     block = np.ix_(free, free)
     expected[block] += theta * (s_K / s_L) * L[block] + 1e-3 * theta * s_K * np.eye(free.sum())
-    np.testing.assert_allclose(solver.regularised(ev, theta, free).toarray(), expected,
-                               rtol=1e-14, atol=1e-12 * s_K)
+    np.testing.assert_allclose(
+        solver.regularised(ev, theta, free).toarray(), expected, rtol=1e-14, atol=1e-12 * s_K
+    )
     ev.metric = None
     plain = K.copy()
     plain[block] += theta * s_K * np.eye(free.sum())
     solver.initial_theta(ev.stiffness, free)
-    np.testing.assert_allclose(solver.regularised(ev, theta, free).toarray(), plain,
-                               rtol=1e-14, atol=1e-12 * s_K)
+    np.testing.assert_allclose(
+        solver.regularised(ev, theta, free).toarray(), plain, rtol=1e-14, atol=1e-12 * s_K
+    )
 
 
 def test_step_metric_follows_the_supports():
@@ -288,13 +295,15 @@ def test_step_metric_follows_the_supports():
         zeroed[:, held] = 0.0
         return zeroed
 
-    np.testing.assert_array_equal(model.discretise().pattern.matrix(model.discretise().at(1.0).metric).toarray(),
-                                  expected())
+    np.testing.assert_array_equal(
+        model.discretise().pattern.matrix(model.discretise().at(1.0).metric).toarray(), expected()
+    )
     held_before = np.count_nonzero(model.constrained)
     model.fix(np.flatnonzero(~model.constrained)[:3] // 3, "x")
     assert np.count_nonzero(model.constrained) > held_before
-    np.testing.assert_array_equal(model.discretise().pattern.matrix(model.discretise().at(1.0).metric).toarray(),
-                                  expected())
+    np.testing.assert_array_equal(
+        model.discretise().pattern.matrix(model.discretise().at(1.0).metric).toarray(), expected()
+    )
 
 
 class _Bowl:
@@ -312,8 +321,13 @@ class _Bowl:
 
         root = np.sqrt(1.0 + u**2)
         K = sp.diags(root**-3).tocsr() if stiffness else None
-        return Evaluation(self.f - u / root, float(np.sum(root) - self.f @ u),
-                          float(np.linalg.norm(self.f)), (u.size, 0, 0), K)
+        return Evaluation(
+            self.f - u / root,
+            float(np.sum(root) - self.f @ u),
+            float(np.linalg.norm(self.f)),
+            (u.size, 0, 0),
+            K,
+        )
 
 
 def test_newton_backtracks_along_a_rejected_step():

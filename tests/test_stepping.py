@@ -51,8 +51,9 @@ class FakeSolver:
 
 
 def test_controller_rules():
-    controller = StepController(first_step=0.5, min_step=0.1, max_step=0.4, cutback=0.25,
-                                growth=3.0, target_iterations=4)
+    controller = StepController(
+        first_step=0.5, min_step=0.1, max_step=0.4, cutback=0.25, growth=3.0, target_iterations=4
+    )
     assert controller.first() == 0.4  # never above max_step
     assert controller.after_failure(0.4) == pytest.approx(0.1)
     assert controller.after_failure(0.3) is None  # 0.075 < min_step
@@ -68,8 +69,12 @@ def test_cut_back_and_growth_sequence():
     solver = FakeSolver(largest=0.2, iterations=3)
     controller = SolverSettings(steps=4, cutback=0.5, growth=2.0, target_iterations=6)
     converged = []
-    follow_load_path(FakeLevels(), solver, controller.controller(),
-                     on_step=lambda f, u, s: converged.append(round(f, 12)))
+    follow_load_path(
+        FakeLevels(),
+        solver,
+        controller.controller(),
+        on_step=lambda f, u, s: converged.append(round(f, 12)),
+    )
     assert converged == [0.125 * k for k in range(1, 9)]
     assert solver.trials[:4] == [0.25, 0.125, 0.375, 0.25]
 
@@ -91,11 +96,22 @@ def test_failure_below_min_step_reports_where_it_stopped():
     assert solver.trials == [1.0, 0.5, 0.25, 0.125]  # 0.0625 would be below min_step
 
 
-@pytest.mark.parametrize("field, value", [
-    ("steps", 0), ("cutback", 1.0), ("cutback", 0.0), ("growth", 0.5), ("min_step", -1.0),
-    ("max_step", 2.0), ("target_iterations", -1), ("tolerance", 0.0), ("method", "lbfgs"),
-    ("linear_solver", "mumps"), ("max_iterations", 0),
-])
+@pytest.mark.parametrize(
+    "field, value",
+    [
+        ("steps", 0),
+        ("cutback", 1.0),
+        ("cutback", 0.0),
+        ("growth", 0.5),
+        ("min_step", -1.0),
+        ("max_step", 2.0),
+        ("target_iterations", -1),
+        ("tolerance", 0.0),
+        ("method", "lbfgs"),
+        ("linear_solver", "mumps"),
+        ("max_iterations", 0),
+    ],
+)
 def test_bad_settings_name_the_field(field, value):
     with pytest.raises(ValueError, match=f"solver {field} must be"):
         SolverSettings(**{field: value})

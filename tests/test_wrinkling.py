@@ -45,7 +45,9 @@ def _random_deformations(n, rng=RNG):
     out = []
     for _ in range(n):
         l1, l2 = rng.uniform(0.85, 1.2, size=2)
-        out.append(_rotation(rng.uniform(0, np.pi)) @ np.diag([l1, l2]) @ _rotation(rng.uniform(0, np.pi)))
+        out.append(
+            _rotation(rng.uniform(0, np.pi)) @ np.diag([l1, l2]) @ _rotation(rng.uniform(0, np.pi))
+        )
     return np.array(out)
 
 
@@ -131,8 +133,9 @@ def test_wrinkled_state_is_plane_stress_in_3d(name):
         E = 0.5 * (F.T @ F + b * np.outer(w, w) - np.eye(2))
         strain = np.zeros(6)
         strain[inplane] = E[0, 0], E[1, 1], 2 * E[0, 1]
-        strain[outplane] = np.linalg.solve(H[np.ix_(outplane, outplane)],
-                                           -H[np.ix_(outplane, inplane)] @ strain[inplane])
+        strain[outplane] = np.linalg.solve(
+            H[np.ix_(outplane, outplane)], -H[np.ix_(outplane, inplane)] @ strain[inplane]
+        )
         S = H @ strain
         assert np.abs(S[outplane]).max() < 1e-12 * np.abs(S).max()
         assert point.thickness == pytest.approx(
@@ -221,8 +224,9 @@ def test_uniaxial_closed_form():
     assert point.wrinkling_strain == pytest.approx(natural / lateral - 1, rel=1e-12)
     np.testing.assert_allclose(np.abs(point.tension_direction), [1, 0], atol=1e-14)
     # Cauchy resultant per unit current length of the mean (wrinkled) surface
-    np.testing.assert_allclose(point.principal_stress, [0, E * t * E11 * stretch / lateral],
-                               rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(
+        point.principal_stress, [0, E * t * E11 * stretch / lateral], rtol=1e-12, atol=1e-15
+    )
 
 
 def test_material_response_rejects_bad_input():

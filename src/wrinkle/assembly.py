@@ -78,22 +78,22 @@ class SparsityPattern:
         # 3 block_ptr[a]
         columns = (DOFS_PER_NODE * block_col[:, None] + j).ravel()
         segment_shift = indptr[:-1] - DOFS_PER_NODE * np.repeat(block_ptr[:-1], DOFS_PER_NODE)
-        self.indices: npt.NDArray[np.signedinteger] = columns[np.arange(self.nnz) - np.repeat(segment_shift, row_length)].astype(
-            index_dtype
-        )
+        self.indices: npt.NDArray[np.signedinteger] = columns[
+            np.arange(self.nnz) - np.repeat(segment_shift, row_length)
+        ].astype(index_dtype)
         # (element, k, i, l, j): entry (3 a_k + i, 3 a_l + j) of block (a_k, a_l), that is
         # _position(a_k, block, i, j) = (6 start + 3 block) + i (3 degree) + j.
         block_base = (6 * block_ptr[triangles])[:, :, None] + 3 * block  # (n, 3, 3)
         row_step = 3 * degree[triangles]  # (n, 3)
         element_to_data = (
-            block_base[:, :, None, :, None] + row_step[:, :, None, None, None] * i[:, None, None] + j
+            block_base[:, :, None, :, None]
+            + row_step[:, :, None, None, None] * i[:, None, None]
+            + j
         )
         self.element_to_data = element_to_data.astype(index_dtype).reshape(n, 81)
         nodes = np.arange(n_nodes)
         diagonal_block = np.searchsorted(keys, nodes * (n_nodes + 1))
-        self.diagonal = self._position(
-            nodes[:, None], diagonal_block[:, None], i, i
-        ).reshape(-1)
+        self.diagonal = self._position(nodes[:, None], diagonal_block[:, None], i, i).reshape(-1)
 
     def _position(self, row_node, block, i, j):
         """CSR data index of entry (3 row_node + i, 3 col + j) of node-pair block ``block``."""
@@ -135,7 +135,7 @@ class SparsityPattern:
         first, last = int(positions.min()), int(positions.max())
         span = last - first + 1
         if span <= 8 * positions.size:
-            data[first:last + 1] += np.bincount(positions - first, weights, minlength=span)
+            data[first : last + 1] += np.bincount(positions - first, weights, minlength=span)
         else:
             np.add.at(data, positions, weights)
 
@@ -144,6 +144,7 @@ class SparsityPattern:
         return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n_dofs, self.n_dofs))
 
     def constraint_positions(self, constrained: np.ndarray) -> np.ndarray:
-        """Data positions of all entries in a constrained row or column; constrained (n_dofs,) bool."""
+        """Data positions of all entries in a constrained row or column; constrained (n_dofs,)
+        bool."""
         rows = np.repeat(np.arange(self.n_dofs), np.diff(self.indptr))
         return np.flatnonzero(constrained[rows] | constrained[self.indices])

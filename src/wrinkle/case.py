@@ -53,8 +53,18 @@ LOAD_KINDS = {
     "nodal": ({"nodes", "force"}, set()),
     "gravity": ({"acceleration", "density"}, {"region"}),
 }
-SOLVER_KEYS = {"method", "steps", "tolerance", "max_iterations", "min_step", "max_step",
-               "cutback", "growth", "target_iterations", "linear_solver"}
+SOLVER_KEYS = {
+    "method",
+    "steps",
+    "tolerance",
+    "max_iterations",
+    "min_step",
+    "max_step",
+    "cutback",
+    "growth",
+    "target_iterations",
+    "linear_solver",
+}
 
 
 class _Reader:
@@ -75,8 +85,9 @@ class _Reader:
         if missing:
             self.fail(where, f"missing key '{missing[0]}'")
 
-    def number(self, table: dict, key: str, where: str, positive=False, integer=False,
-               minimum=None):
+    def number(
+        self, table: dict, key: str, where: str, positive=False, integer=False, minimum=None
+    ):
         value = table[key]
         kind = int if integer else (int, float)
         if isinstance(value, bool) or not isinstance(value, kind):
@@ -120,8 +131,10 @@ class _Reader:
         region = self.string(table, "region", where)
         if region not in mesh.element_sets:
             known = ", ".join(sorted(mesh.element_sets)) or "none"
-            self.fail(where, f"region '{region}' is not a physical group of elements "
-                             f"(the mesh has: {known})")
+            self.fail(
+                where,
+                f"region '{region}' is not a physical group of elements (the mesh has: {known})",
+            )
         return mesh.element_sets[region]
 
 
@@ -171,8 +184,7 @@ class Case:
         if results is not None:
             results.probes, results.units, results.source = self.probes, self.units, self.source
 
-    def solve(self, on_step: Callable[[StepResult], None] | None = None,
-              **options: Any) -> Results:
+    def solve(self, on_step: Callable[[StepResult], None] | None = None, **options: Any) -> Results:
         """Solve the model with the case's settings (``options``: fields of
         ``SolverSettings`` overriding them); the results carry the case's probes and units.
         Raises ConvergenceError (its ``results`` labelled the same) if a step fails."""
@@ -184,14 +196,19 @@ class Case:
         self._label(results)
         return results
 
-    def run(self, out: str | os.PathLike, on_step: Callable[[StepResult], None] | None = None,
-            **options: Any) -> Results:
+    def run(
+        self,
+        out: str | os.PathLike,
+        on_step: Callable[[StepResult], None] | None = None,
+        **options: Any,
+    ) -> Results:
         """Solve and write each converged step into the folder ``out`` as it converges
         (``wrinkle.output.ResultWriter``), then the final summary; ``on_step`` is called after
         each step is written. A ConvergenceError or KeyboardInterrupt is raised again after
         the summary records it; every converged step is on disk."""
-        writer = ResultWriter(out, self.model, probes=self.probes, units=self.units,
-                              case=self.source)
+        writer = ResultWriter(
+            out, self.model, probes=self.probes, units=self.units, case=self.source
+        )
 
         def write(step: StepResult) -> None:
             writer.write_step(step)
@@ -222,15 +239,23 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
     data = read_case_data(path)
     if overrides:
         data = merged(data, overrides)
-    reader.keys(data, "top level", {"mesh", "material"},
-                {"support", "load", "probe", "solver", "title", "verification"})
+    reader.keys(
+        data,
+        "top level",
+        {"mesh", "material"},
+        {"support", "load", "probe", "solver", "title", "verification"},
+    )
 
     mesh, units = _read_mesh(reader, data["mesh"], path.parent)
     model = Model(mesh)
     materials = data["material"] if isinstance(data["material"], list) else [data["material"]]
     for index, table in enumerate(materials):
-        _read_material(reader, model, table, f"[[material]] {index + 1}" if len(materials) > 1
-                       else "[material]")
+        _read_material(
+            reader,
+            model,
+            table,
+            f"[[material]] {index + 1}" if len(materials) > 1 else "[material]",
+        )
     supports = data.get("support", [])
     if not isinstance(supports, list) or not supports:
         reader.fail("[[support]]", "at least one support is needed")
@@ -274,8 +299,9 @@ def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:
         elif isinstance(units_table, dict):
             units = {str(k): str(v) for k, v in units_table.items()}
         else:
-            reader.fail(where, "'units' must be a string or a table such as "
-                               '{length = "m", force = "N"}')
+            reader.fail(
+                where, '\'units\' must be a string or a table such as {length = "m", force = "N"}'
+            )
     source = sources[0]
     try:
         if source == "file":
@@ -287,12 +313,17 @@ def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:
         if not isinstance(parameters, dict):
             reader.fail(sub, "must be a table, e.g. {width = 1.0, height = 1.0, nx = 10, ny = 10}")
         if source == "disk" and "inner_radius" in parameters:
-            reader.fail(sub, "a disk has no 'inner_radius': for a disk with a hole use [mesh] "
-                             "annulus = {inner_radius, outer_radius, n_radial, "
-                             "n_circumferential}")
+            reader.fail(
+                sub,
+                "a disk has no 'inner_radius': for a disk with a hole use [mesh] "
+                "annulus = {inner_radius, outer_radius, n_radial, "
+                "n_circumferential}",
+            )
         reader.keys(parameters, sub, set(keys), set())
-        values = [reader.number(parameters, key, sub, positive=True, integer=key.startswith("n"))
-                  for key in keys]
+        values = [
+            reader.number(parameters, key, sub, positive=True, integer=key.startswith("n"))
+            for key in keys
+        ]
         return generator(*values), units
     except CaseError:
         raise
@@ -309,8 +340,9 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
     if name not in MATERIAL_MODELS:
         reader.fail(where, f"unknown model '{name}' (one of " + ", ".join(MATERIAL_MODELS) + ")")
     parameters = MATERIAL_MODELS[name]
-    optional = {"model", "direction", "angle", "region"} | ({"lmbda"} if name == "neo-hookean"
-                                                             else set())
+    optional = {"model", "direction", "angle", "region"} | (
+        {"lmbda"} if name == "neo-hookean" else set()
+    )
     reader.keys(table, where, {*parameters, "thickness"}, optional)
     values = {key: reader.number(table, key, where) for key in (*parameters, "thickness")}
     if "lmbda" in table:
@@ -332,8 +364,11 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
         data = model.mesh.cell_data.get(name)
         if data is None or data.shape != (model.mesh.n_elements, 3):
             known = ", ".join(f"{k} {v.shape}" for k, v in model.mesh.cell_data.items())
-            reader.fail(where, f"'direction' names cell data '{name}', but the mesh has no "
-                               f"such (n_elements, 3) array (it has: {known or 'none'})")
+            reader.fail(
+                where,
+                f"'direction' names cell data '{name}', but the mesh has no "
+                f"such (n_elements, 3) array (it has: {known or 'none'})",
+            )
         direction = data if elements is None else data[elements]
     elif "direction" in table:
         direction = reader.vector(table, "direction", where)
@@ -355,7 +390,7 @@ def _read_support(reader: _Reader, model: Model, table: dict, where: str) -> Non
     if "fix" in table:
         fix = table["fix"]
         if not isinstance(fix, list) or not fix or any(c not in ("x", "y", "z") for c in fix):
-            reader.fail(where, f"'fix' must be a list drawn from \"x\", \"y\", \"z\", got {fix!r}")
+            reader.fail(where, f'\'fix\' must be a list drawn from "x", "y", "z", got {fix!r}')
         model.fix(nodes, fix, label=label)
         return
     components = reader.vector(table, "displacement", where, allow_free=True, expressions=True)
@@ -382,15 +417,19 @@ def _read_load(reader: _Reader, model: Model, table: dict, where: str) -> None:
     mesh = model.mesh
     try:
         if kind == "pressure":
-            model.add_pressure(reader.number(table, "value", where),
-                               reader.elements(mesh, table, where))
+            model.add_pressure(
+                reader.number(table, "value", where), reader.elements(mesh, table, where)
+            )
         elif kind == "nodal":
-            model.add_nodal_force(reader.nodes(mesh, table, where),
-                                  reader.vector(table, "force", where))
+            model.add_nodal_force(
+                reader.nodes(mesh, table, where), reader.vector(table, "force", where)
+            )
         elif kind == "gravity":
-            model.add_gravity(reader.vector(table, "acceleration", where),
-                              reader.number(table, "density", where, positive=True),
-                              reader.elements(mesh, table, where))
+            model.add_gravity(
+                reader.vector(table, "acceleration", where),
+                reader.number(table, "density", where, positive=True),
+                reader.elements(mesh, table, where),
+            )
         else:
             if ("traction" in table) == ("normal" in table):
                 reader.fail(where, "an edge load needs either 'traction' or 'normal'")
@@ -425,15 +464,17 @@ def _read_solver(reader: _Reader, table: dict) -> SolverSettings:
     if "linear_solver" in table:
         name = reader.string(table, "linear_solver", where)
         if name != "auto" and name not in LINEAR_SOLVERS:
-            reader.fail(where, f"unknown linear_solver '{name}' (one of auto, "
-                               f"{', '.join(LINEAR_SOLVERS)})")
+            reader.fail(
+                where, f"unknown linear_solver '{name}' (one of auto, {', '.join(LINEAR_SOLVERS)})"
+            )
         solver["linear_solver"] = name
     for key in ("steps", "max_iterations"):
         if key in table:
             solver[key] = reader.number(table, key, where, integer=True, minimum=1)
     if "target_iterations" in table:
-        solver["target_iterations"] = reader.number(table, "target_iterations", where,
-                                                    integer=True, minimum=0)
+        solver["target_iterations"] = reader.number(
+            table, "target_iterations", where, integer=True, minimum=0
+        )
     for key in ("tolerance", "min_step", "max_step", "cutback", "growth"):
         if key in table:
             solver[key] = float(reader.number(table, key, where, positive=True))

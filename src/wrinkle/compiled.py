@@ -34,14 +34,22 @@ that; WRINKLE_NUMBA=1 in the environment uses them on every mesh, WRINKLE_NUMBA=
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable
 import importlib.util
 import os
+from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["MIN_ELEMENTS", "add_pressure_forces", "element_stiffness", "enabled", "installed",
-           "nodal_forces", "scatter_add", "subtract_pressure_stiffness"]
+__all__ = [
+    "MIN_ELEMENTS",
+    "add_pressure_forces",
+    "element_stiffness",
+    "enabled",
+    "installed",
+    "nodal_forces",
+    "scatter_add",
+    "subtract_pressure_stiffness",
+]
 
 MIN_ELEMENTS = 10_000
 
@@ -198,25 +206,37 @@ def _compiled(name: str):
         import numba
 
         jit = numba.njit(cache=True, boundscheck=False)
-        _kernels.update(element_stiffness=jit(_element_stiffness),
-                        subtract_pressure_stiffness=jit(_subtract_pressure_stiffness),
-                        nodal_forces=jit(_nodal_forces),
-                        add_pressure_forces=jit(_add_pressure_forces),
-                        wrinkled_tangent=jit(_wrinkled_tangent),
-                        scatter_add=jit(_scatter_add))
+        _kernels.update(
+            element_stiffness=jit(_element_stiffness),
+            subtract_pressure_stiffness=jit(_subtract_pressure_stiffness),
+            nodal_forces=jit(_nodal_forces),
+            add_pressure_forces=jit(_add_pressure_forces),
+            wrinkled_tangent=jit(_wrinkled_tangent),
+            scatter_add=jit(_scatter_add),
+        )
     return _kernels[name]
 
 
-def element_stiffness(area: np.ndarray, F: np.ndarray, shape_gradient: np.ndarray,
-                      tangent: np.ndarray, stress: np.ndarray, out: np.ndarray) -> np.ndarray:
+def element_stiffness(
+    area: np.ndarray,
+    F: np.ndarray,
+    shape_gradient: np.ndarray,
+    tangent: np.ndarray,
+    stress: np.ndarray,
+    out: np.ndarray,
+) -> np.ndarray:
     """Consistent tangent stiffness A0 (B^T D B + G (x) I3) written into out, (m, 9, 9).
 
     area (m,), F (m, 3, 2), shape_gradient (m, 3, 2), tangent D (m, 3, 3) Voigt,
     stress N (m, 2, 2) resultant; the formula of ``wrinkle.element.element_stiffness``.
     """
     _compiled("element_stiffness")(
-        np.ascontiguousarray(area), np.ascontiguousarray(F), np.ascontiguousarray(shape_gradient),
-        np.ascontiguousarray(tangent), np.ascontiguousarray(stress), out,
+        np.ascontiguousarray(area),
+        np.ascontiguousarray(F),
+        np.ascontiguousarray(shape_gradient),
+        np.ascontiguousarray(tangent),
+        np.ascontiguousarray(stress),
+        out,
     )
     return out
 
@@ -229,38 +249,50 @@ def subtract_pressure_stiffness(K: np.ndarray, x: np.ndarray, pressure: np.ndarr
     )
 
 
-def nodal_forces(area: np.ndarray, F: np.ndarray, shape_gradient: np.ndarray,
-                 stress: np.ndarray, out: np.ndarray) -> np.ndarray:
+def nodal_forces(
+    area: np.ndarray, F: np.ndarray, shape_gradient: np.ndarray, stress: np.ndarray, out: np.ndarray
+) -> np.ndarray:
     """Internal nodal forces A0 F N grad psi_k written into out, (m, 9); area (m,),
     F (m, 3, 2), shape_gradient (m, 3, 2), stress N (m, 2, 2) resultant; the formula of
     ``wrinkle.element._nodal_forces``."""
     _compiled("nodal_forces")(
-        np.ascontiguousarray(area), np.ascontiguousarray(F), np.ascontiguousarray(shape_gradient),
-        np.ascontiguousarray(stress), out,
+        np.ascontiguousarray(area),
+        np.ascontiguousarray(F),
+        np.ascontiguousarray(shape_gradient),
+        np.ascontiguousarray(stress),
+        out,
     )
     return out
 
 
-def add_pressure_forces(forces: np.ndarray, dofs: np.ndarray, x: np.ndarray,
-                        pressure: np.ndarray) -> None:
+def add_pressure_forces(
+    forces: np.ndarray, dofs: np.ndarray, x: np.ndarray, pressure: np.ndarray
+) -> None:
     """Add the follower pressure's nodal forces of m triangles to the global vector forces
     (n_dofs,) in place: dofs (m, 9) their degrees of freedom, x (m, 3 nodes, 3) current
     coordinates, pressure (m,); ``wrinkle.loads.pressure_forces`` summed by ``np.bincount``."""
     _compiled("add_pressure_forces")(
-        forces, np.ascontiguousarray(dofs), np.ascontiguousarray(x),
+        forces,
+        np.ascontiguousarray(dofs),
+        np.ascontiguousarray(x),
         np.ascontiguousarray(pressure, dtype=float),
     )
 
 
-def wrinkled_tangent(c: np.ndarray, s: np.ndarray, b: np.ndarray, stress: np.ndarray,
-                     D: np.ndarray) -> np.ndarray:
+def wrinkled_tangent(
+    c: np.ndarray, s: np.ndarray, b: np.ndarray, stress: np.ndarray, D: np.ndarray
+) -> np.ndarray:
     """Consistent tangent dN/dE of m wrinkled elements, (m, 3, 3): w = (c, s), b (m,) each,
     stress (m, 2, 2) and D (m, 3, 3) the law at C'; the formula of
     ``wrinkle.wrinkling.Wrinkling._wrinkled_tangent``."""
     out = np.empty((c.shape[0], 3, 3))
     _compiled("wrinkled_tangent")(
-        np.ascontiguousarray(c), np.ascontiguousarray(s), np.ascontiguousarray(b),
-        np.ascontiguousarray(stress), np.ascontiguousarray(D), out,
+        np.ascontiguousarray(c),
+        np.ascontiguousarray(s),
+        np.ascontiguousarray(b),
+        np.ascontiguousarray(stress),
+        np.ascontiguousarray(D),
+        out,
     )
     return out
 

@@ -22,7 +22,15 @@ from wrinkle import compiled as kernels
 from wrinkle.kinematics import ReferenceGeometry, deformation_gradient, right_cauchy_green
 from wrinkle.wrinkling import Wrinkling, WrinklingError, WrinklingResponse
 
-__all__ = ["KERNEL_BLOCK", "ElementResult", "MembraneElements", "add_geometric_stiffness", "element_stiffness", "strain_displacement", "unit_tension_stiffness"]
+__all__ = [
+    "KERNEL_BLOCK",
+    "ElementResult",
+    "MembraneElements",
+    "add_geometric_stiffness",
+    "element_stiffness",
+    "strain_displacement",
+    "unit_tension_stiffness",
+]
 
 
 @dataclass
@@ -100,8 +108,9 @@ def element_stiffness(
     return add_geometric_stiffness(K, area, shape_gradient, stress)
 
 
-def add_geometric_stiffness(K: np.ndarray, area: np.ndarray, shape_gradient: np.ndarray,
-                            stress: np.ndarray) -> np.ndarray:
+def add_geometric_stiffness(
+    K: np.ndarray, area: np.ndarray, shape_gradient: np.ndarray, stress: np.ndarray
+) -> np.ndarray:
     """K += A0 G (x) I3 in place, G_kl = grad psi_k . N grad psi_l: the geometric
     (initial-stress) stiffness of the stress resultant N, (m, 2, 2); K (m, 9, 9), returned."""
     N00, N11, N01 = area * stress[:, 0, 0], area * stress[:, 1, 1], area * stress[:, 0, 1]
@@ -126,8 +135,9 @@ def unit_tension_stiffness(area: np.ndarray, shape_gradient: np.ndarray) -> np.n
     a displacement field): the metric in which the Newton solver measures its steps.
     """
     m = area.shape[0]
-    return add_geometric_stiffness(np.zeros((m, 9, 9)), area, shape_gradient,
-                                   np.broadcast_to(np.eye(2), (m, 2, 2)))
+    return add_geometric_stiffness(
+        np.zeros((m, 9, 9)), area, shape_gradient, np.broadcast_to(np.eye(2), (m, 2, 2))
+    )
 
 
 class MembraneElements:
@@ -142,8 +152,9 @@ class MembraneElements:
         self.material = material
         self.compiled = compiled
 
-    def evaluate(self, x_elements: np.ndarray, stiffness: bool = True,
-                 stiffness_sink=None) -> ElementResult:
+    def evaluate(
+        self, x_elements: np.ndarray, stiffness: bool = True, stiffness_sink=None
+    ) -> ElementResult:
         """Forces (and stiffness) at current node coordinates x_elements, (n, 3, 3).
 
         Elements are evaluated block by block (results do not depend on the blocks). With
@@ -159,8 +170,9 @@ class MembraneElements:
             response = self.material.response(
                 right_cauchy_green(F), tangent=stiffness, compiled=self.compiled
             )
-            forces, K = self._forces_and_stiffness(F, slice(0, n), response, stiffness,
-                                                   sink=stiffness_sink)
+            forces, K = self._forces_and_stiffness(
+                F, slice(0, n), response, stiffness, sink=stiffness_sink
+            )
             return ElementResult(F, response, forces, K, g.area * response.energy)
 
         F = np.empty((n, 3, 2))
@@ -194,15 +206,21 @@ class MembraneElements:
                 if array is not None:
                     array[block] = getattr(r, name)
             self._forces_and_stiffness(
-                F_block, block, r, stiffness, forces[block], None if K is None else K[block],
+                F_block,
+                block,
+                r,
+                stiffness,
+                forces[block],
+                None if K is None else K[block],
                 stiffness_sink,
             )
         if failed:
             raise WrinklingError(np.concatenate(failed))
         return ElementResult(F, response, forces, K, g.area * response.energy)
 
-    def _forces_and_stiffness(self, F, elements, response, stiffness, forces=None, K=None,
-                              sink=None):
+    def _forces_and_stiffness(
+        self, F, elements, response, stiffness, forces=None, K=None, sink=None
+    ):
         """Forces (m, 9) and stiffness (m, 9, 9) or None of the block ``elements`` (a slice),
         written into ``forces`` and ``K`` if given, or the stiffness of each sub-block handed
         to ``sink(rows, K_sub)`` (then None is returned for it); computed in sub-blocks."""
@@ -222,10 +240,9 @@ class MembraneElements:
             else:
                 _nodal_forces(area, F_sub, grad, stress, forces[sub])
             if stiffness:
-                out = K[:sub.stop - sub.start] if sink else K[sub]
+                out = K[: sub.stop - sub.start] if sink else K[sub]
                 if self.compiled:
-                    kernels.element_stiffness(area, F_sub, grad, response.tangent[sub], stress,
-                                               out)
+                    kernels.element_stiffness(area, F_sub, grad, response.tangent[sub], stress, out)
                 else:
                     B = strain_displacement(F_sub, grad)
                     element_stiffness(area, B, response.tangent[sub], grad, stress, out=out)

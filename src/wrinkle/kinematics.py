@@ -53,7 +53,9 @@ class ReferenceGeometry:
     def subset(self, elements: np.ndarray) -> ReferenceGeometry:
         """The geometry of some elements (indices), in that order."""
         return ReferenceGeometry(
-            self.area[elements], self.normal[elements], self.frame[elements],
+            self.area[elements],
+            self.normal[elements],
+            self.frame[elements],
             self.shape_gradient[elements],
         )
 
@@ -174,8 +176,7 @@ def reference_geometry(
     if np.any(degenerate):
         element = int(np.flatnonzero(degenerate)[0])
         raise ValueError(
-            f"element {element} (nodes {np.asarray(triangles)[element].tolist()}) "
-            "has zero area"
+            f"element {element} (nodes {np.asarray(triangles)[element].tolist()}) has zero area"
         )
     frame = material_frame(normal, fibre_direction, fibre_angle, isotropic)
     # in-plane coordinates of G1, G2: M[:, a, alpha] = G_alpha . A_a

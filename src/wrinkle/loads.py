@@ -13,7 +13,15 @@ import numpy as np
 
 from wrinkle.kinematics import cross
 
-__all__ = ["boundary_edges", "edge_dead_forces", "edge_follower_forces", "pressure_forces", "pressure_volume", "skew", "subtract_pressure_stiffness"]
+__all__ = [
+    "boundary_edges",
+    "edge_dead_forces",
+    "edge_follower_forces",
+    "pressure_forces",
+    "pressure_volume",
+    "skew",
+    "subtract_pressure_stiffness",
+]
 
 
 def skew(a: np.ndarray) -> np.ndarray:

@@ -15,7 +15,8 @@ from types import ModuleType
 
 import numpy as np
 
-__all__ = ["require_meshio", 
+__all__ = [
+    "require_meshio",
     "Mesh",
     "annulus",
     "cylinder",
@@ -158,9 +159,13 @@ def rectangle(width: float, height: float, nx: int, ny: int, diagonal: str = "ri
     n00 = (j * (nx + 1) + i).ravel()
     n10, n01, n11 = n00 + 1, n00 + nx + 1, n00 + nx + 2
     if diagonal == "right":
-        triangles = np.concatenate([np.column_stack([n00, n10, n11]), np.column_stack([n00, n11, n01])])
+        triangles = np.concatenate(
+            [np.column_stack([n00, n10, n11]), np.column_stack([n00, n11, n01])]
+        )
     elif diagonal == "left":
-        triangles = np.concatenate([np.column_stack([n00, n10, n01]), np.column_stack([n10, n11, n01])])
+        triangles = np.concatenate(
+            [np.column_stack([n00, n10, n01]), np.column_stack([n10, n11, n01])]
+        )
     else:
         raise ValueError(f"rectangle: diagonal must be 'right' or 'left', got {diagonal!r}")
     grid = np.arange(nodes.shape[0]).reshape(ny + 1, nx + 1)
@@ -202,10 +207,12 @@ def _polar_rings(radii: np.ndarray, n_circumferential: int) -> tuple[np.ndarray,
     inner = i * n_circumferential + j
     inner_next = i * n_circumferential + (j + 1) % n_circumferential
     outer, outer_next = inner + n_circumferential, inner_next + n_circumferential
-    triangles = np.concatenate([
-        np.column_stack([inner.ravel(), outer.ravel(), outer_next.ravel()]),
-        np.column_stack([inner.ravel(), outer_next.ravel(), inner_next.ravel()]),
-    ])
+    triangles = np.concatenate(
+        [
+            np.column_stack([inner.ravel(), outer.ravel(), outer_next.ravel()]),
+            np.column_stack([inner.ravel(), outer_next.ravel(), inner_next.ravel()]),
+        ]
+    )
     return nodes, triangles
 
 
@@ -259,9 +266,7 @@ def disk(radius: float, n_radial: int, n_circumferential: int) -> Mesh:
     radii = radius * np.arange(1, n_radial + 1) / n_radial
     ring_nodes, ring_triangles = _polar_rings(radii, n_circumferential)
     first = 1 + np.arange(n_circumferential)
-    fan = np.column_stack([
-        np.zeros(n_circumferential, dtype=np.int64), first, np.roll(first, -1)
-    ])
+    fan = np.column_stack([np.zeros(n_circumferential, dtype=np.int64), first, np.roll(first, -1)])
     nodes = np.vstack([np.zeros((1, 3)), ring_nodes])
     triangles = np.vstack([fan, 1 + ring_triangles])
     sets = {"outer": 1 + (n_radial - 1) * n_circumferential + np.arange(n_circumferential)}
@@ -301,13 +306,23 @@ def sphere(radius: float, n: int) -> Mesh:
 
     up = i > 0  # the triangle (j, k), (j + 1, k), (j, k + 1) above each node off side i = 0
     down = i > 1  # the triangle (j + 1, k), (j + 1, k + 1), (j, k + 1)
-    triangles = np.concatenate([
-        np.column_stack([node(j[up], k[up]), node(j[up] + 1, k[up]), node(j[up], k[up] + 1)]),
-        np.column_stack([node(j[down] + 1, k[down]), node(j[down] + 1, k[down] + 1),
-                         node(j[down], k[down] + 1)]),
-    ])
-    sets = {"yz-plane": np.flatnonzero(i == 0), "zx-plane": np.flatnonzero(j == 0),
-            "xy-plane": np.flatnonzero(k == 0)}
+    triangles = np.concatenate(
+        [
+            np.column_stack([node(j[up], k[up]), node(j[up] + 1, k[up]), node(j[up], k[up] + 1)]),
+            np.column_stack(
+                [
+                    node(j[down] + 1, k[down]),
+                    node(j[down] + 1, k[down] + 1),
+                    node(j[down], k[down] + 1),
+                ]
+            ),
+        ]
+    )
+    sets = {
+        "yz-plane": np.flatnonzero(i == 0),
+        "zx-plane": np.flatnonzero(j == 0),
+        "xy-plane": np.flatnonzero(k == 0),
+    }
     return Mesh(nodes, triangles, sets)
 
 
@@ -347,8 +362,13 @@ def cylinder(
     wall = wall[:, [0, 2, 1]]
     angle = 2.0 * np.pi * np.arange(n) / n
     x = np.repeat(length * np.arange(n_axial + 1) / n_axial, n)
-    wall_nodes = np.column_stack([x, radius * np.tile(np.cos(angle), n_axial + 1),
-                                  radius * np.tile(np.sin(angle), n_axial + 1)])
+    wall_nodes = np.column_stack(
+        [
+            x,
+            radius * np.tile(np.cos(angle), n_axial + 1),
+            radius * np.tile(np.sin(angle), n_axial + 1),
+        ]
+    )
     n_wall = wall_nodes.shape[0]
     # a cap: a disk in the (y, z) plane, local node 0 its centre, 1 + (k - 1) n + j on circle k;
     # counter-clockwise seen from +x (y x z = x), i.e. from outside at the tip
@@ -362,8 +382,10 @@ def cylinder(
     node_sets = {"root": np.arange(n), "tip": n_axial * n + np.arange(n)}
     element_sets = {"wall": np.arange(wall.shape[0])}
     n_elements = wall.shape[0]
-    for name, x_cap, ring, offset in (("root_cap", 0.0, node_sets["root"], n_wall),
-                                      ("tip_cap", length, node_sets["tip"], n_wall + n_inner)):
+    for name, x_cap, ring, offset in (
+        ("root_cap", 0.0, node_sets["root"], n_wall),
+        ("tip_cap", length, node_sets["tip"], n_wall + n_inner),
+    ):
         local_to_global = np.concatenate([offset + np.arange(n_inner), ring])
         cap = local_to_global[cap_triangles]
         triangles.append(cap[:, [0, 2, 1]] if name == "root_cap" else cap)  # root faces -x
@@ -624,8 +646,7 @@ def require_meshio() -> ModuleType:
         import meshio
     except ImportError:
         raise ImportError(
-            "wrinkle: meshio, which reads meshes and writes results, is missing: "
-            "pip install meshio"
+            "wrinkle: meshio, which reads meshes and writes results, is missing: pip install meshio"
         ) from None
     return meshio
 
@@ -730,14 +751,11 @@ def _mesh_from_meshio(data, gmsh: _GmshElementData | None = None) -> Mesh:
                 " for node groups)"
             )
         if cells.size and (cells.min() < 0 or cells.max() >= n_points):
-            raise ValueError(
-                f"a {cell_type} cell refers to a point outside 0..{n_points - 1}"
-            )
+            raise ValueError(f"a {cell_type} cell refers to a point outside 0..{n_points - 1}")
     if n_elements == 0:
         found = sorted({cell_type for cell_type, _ in blocks})
         raise ValueError(
-            "no triangles in the mesh (cell types: "
-            + (", ".join(found) if found else "none") + ")"
+            "no triangles in the mesh (cell types: " + (", ".join(found) if found else "none") + ")"
         )
     triangles = np.concatenate(triangle_parts).astype(np.int64)
 

@@ -54,7 +54,9 @@ def _component_indices(components: str | Sequence[str]) -> list[int]:
     try:
         return [COMPONENTS[c] for c in components]
     except KeyError:
-        raise ValueError(f"components must be drawn from 'x', 'y', 'z', got {components!r}") from None
+        raise ValueError(
+            f"components must be drawn from 'x', 'y', 'z', got {components!r}"
+        ) from None
 
 
 @dataclass
@@ -147,8 +149,9 @@ class Model:
         if isinstance(elements, str):
             if elements not in self.mesh.element_sets:
                 known = ", ".join(sorted(self.mesh.element_sets)) or "none"
-                raise ValueError(f"'{elements}' is not an element set of the mesh "
-                                 f"(it has: {known})")
+                raise ValueError(
+                    f"'{elements}' is not an element set of the mesh (it has: {known})"
+                )
             return np.asarray(self.mesh.element_sets[elements], dtype=np.int64)
         return _indices(elements, self.mesh.n_elements, "element")
 
@@ -170,13 +173,16 @@ class Model:
         wrinkling = material if isinstance(material, Wrinkling) else Wrinkling(material)
         direction = self._fibre_direction[chosen]
         if fibre_direction is not None:
-            direction = np.broadcast_to(np.asarray(fibre_direction, dtype=float),
-                                        direction.shape)
+            direction = np.broadcast_to(np.asarray(fibre_direction, dtype=float), direction.shape)
         if not wrinkling.is_isotropic:
             _, _, _, normal = reference_normals(self.mesh.nodes, self.mesh.triangles[chosen])
             flat = ~np.all(np.isfinite(normal), axis=1)  # zero area: reported by the geometry
-            material_frame(np.where(flat[:, None], 0.0, normal), direction, isotropic=flat,
-                           element_numbers=chosen)
+            material_frame(
+                np.where(flat[:, None], 0.0, normal),
+                direction,
+                isotropic=flat,
+                element_numbers=chosen,
+            )
         self._materials.append(wrinkling)
         self._material_of_element[chosen] = len(self._materials) - 1
         if fibre_direction is not None:
@@ -200,7 +206,10 @@ class Model:
         if self._geometry is None:
             isotropic = np.array([m.is_isotropic for m in self._materials], dtype=bool)
             self._geometry = reference_geometry(
-                self.mesh.nodes, self.mesh.triangles, self._fibre_direction, self._fibre_angle,
+                self.mesh.nodes,
+                self.mesh.triangles,
+                self._fibre_direction,
+                self._fibre_angle,
                 isotropic=isotropic[self._material_of_element],
             )
         return self._geometry
@@ -212,7 +221,9 @@ class Model:
         self._changed()
 
     def fix(
-        self, nodes: NodeSelection, components: str | Sequence[str] = "xyz",
+        self,
+        nodes: NodeSelection,
+        components: str | Sequence[str] = "xyz",
         label: str | None = None,
     ) -> None:
         """Hold the given displacement components of ``nodes`` at zero."""
@@ -222,8 +233,9 @@ class Model:
         self.prescribed[dofs] = 0.0
         self._add_support(chosen, dofs, label)
 
-    def prescribe(self, nodes: NodeSelection, displacement: ArrayLike,
-                  label: str | None = None) -> None:
+    def prescribe(
+        self, nodes: NodeSelection, displacement: ArrayLike, label: str | None = None
+    ) -> None:
         """Prescribe displacements reached at load factor 1.
 
         displacement: (3,) for all nodes or (k, 3) per node; a NaN component is left free.
@@ -253,8 +265,9 @@ class Model:
         self.pressure[self._element_indices(elements)] += value
         self._changed()
 
-    def add_gravity(self, acceleration: ArrayLike, density: float,
-                    elements: ElementSelection = None) -> None:
+    def add_gravity(
+        self, acceleration: ArrayLike, density: float, elements: ElementSelection = None
+    ) -> None:
         """Dead weight density * reference thickness * A0 * acceleration, a third to each
         node; acceleration (3,) (length / time^2), density mass per unit volume."""
         if not density > 0:
@@ -311,7 +324,7 @@ class Model:
             traction = np.broadcast_to(np.asarray(traction, dtype=float), (triples.shape[0], 3))
             forces = edge_dead_forces(length, traction)
         for k in range(2):
-            np.add.at(self.forces.reshape(-1, 3), triples[:, k], forces[:, 3 * k:3 * k + 3])
+            np.add.at(self.forces.reshape(-1, 3), triples[:, k], forces[:, 3 * k : 3 * k + 3])
         self._changed()
 
     @property
@@ -343,17 +356,25 @@ class Model:
             free = vt[-1]
         else:
             free = np.linalg.svd(held if held.size else np.zeros((1, 6)))[2][-1]
-        names = np.array(["translation in x", "translation in y", "translation in z",
-                          "rotation about x", "rotation about y", "rotation about z"])
+        names = np.array(
+            [
+                "translation in x",
+                "translation in y",
+                "translation in z",
+                "rotation about x",
+                "rotation about y",
+                "rotation about z",
+            ]
+        )
         scale = np.abs(held).max() if held.size else 1.0
         pure = np.all(np.abs(held) <= 1e-12 * scale, axis=0)  # modes no support touches
         if np.any(pure):
             motion = ", ".join(names[pure])
         else:
-            motion = "a motion combining " + " and ".join(names[np.abs(free) > 0.3 * np.abs(free).max()])
-        raise ValueError(
-            f"rigid-body motion is unrestrained: the supports do not prevent {motion}"
-        )
+            motion = "a motion combining " + " and ".join(
+                names[np.abs(free) > 0.3 * np.abs(free).max()]
+            )
+        raise ValueError(f"rigid-body motion is unrestrained: the supports do not prevent {motion}")
 
     # -- discretisation and solution ----------------------------------------------------
     def discretise(self) -> DiscreteSystem:
@@ -405,8 +426,14 @@ class Model:
                 on_step(step)
 
         try:
-            follow_load_path(system, settings.solver(), settings.controller(), u0=u0,
-                             on_step=record, timer=results.stopwatch)
+            follow_load_path(
+                system,
+                settings.solver(),
+                settings.controller(),
+                u0=u0,
+                on_step=record,
+                timer=results.stopwatch,
+            )
         except ConvergenceError as error:
             error.results = results
             raise

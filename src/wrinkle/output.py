@@ -48,7 +48,16 @@ from wrinkle.mesh import require_meshio
 from wrinkle.post import element_report, support_reactions
 from wrinkle.wrinkling import STATE_NAMES
 
-__all__ = ["COLLECTION", "HISTORY", "STEP_FILE", "SUMMARY", "ResultWriter", "atomic_write", "save_results", "step_file_name"]
+__all__ = [
+    "COLLECTION",
+    "HISTORY",
+    "STEP_FILE",
+    "SUMMARY",
+    "ResultWriter",
+    "atomic_write",
+    "save_results",
+    "step_file_name",
+]
 
 SUMMARY = "summary.json"
 HISTORY = "history.csv"
@@ -152,16 +161,18 @@ class ResultWriter:
         support_forces = support_reactions(self.supports, reactions)
         probe_means = {name: u[nodes].mean(axis=0) for name, nodes in self.probes.items()}
         states = [int(s) for s in step.states]
-        self.steps.append({
-            "step": index,
-            "file": name,
-            "load_factor": float(step.load_factor),
-            "iterations": int(step.iterations),
-            "residual": float(step.residual),
-            "states": dict(zip(STATE_NAMES, states)),
-            "reactions": support_forces,
-            "max_displacement": float(np.linalg.norm(u, axis=1).max(initial=0.0)),
-        })
+        self.steps.append(
+            {
+                "step": index,
+                "file": name,
+                "load_factor": float(step.load_factor),
+                "iterations": int(step.iterations),
+                "residual": float(step.residual),
+                "states": dict(zip(STATE_NAMES, states)),
+                "reactions": support_forces,
+                "max_displacement": float(np.linalg.norm(u, axis=1).max(initial=0.0)),
+            }
+        )
         row = [index, float(step.load_factor), int(step.iterations), float(step.residual)]
         row += states
         for force in support_forces.values():
@@ -211,7 +222,7 @@ class ResultWriter:
         for s in self.steps:
             lines.append(
                 f'    <DataSet timestep="{s["load_factor"]!r}" group="" part="0" '
-                f'file={quoteattr(s["file"])}/>'
+                f"file={quoteattr(s['file'])}/>"
             )
         lines += ["  </Collection>", "</VTKFile>", ""]
         _write_text(self.out_dir / COLLECTION, "\n".join(lines))

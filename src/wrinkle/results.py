@@ -66,7 +66,12 @@ class Results:
         if reactions is None:
             reactions = self.model.discretise().reactions(u, load_factor)
         step = StepResult(
-            load_factor, u.copy(), solved.iterations, ev.residual_norm, reactions, ev.states,
+            load_factor,
+            u.copy(),
+            solved.iterations,
+            ev.residual_norm,
+            reactions,
+            ev.states,
         )
         self.steps.append(step)
         return step

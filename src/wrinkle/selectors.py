@@ -35,7 +35,15 @@ import numpy as np
 
 from wrinkle.mesh import Mesh, mesh_size
 
-__all__ = ["CONSTANTS", "FUNCTIONS", "KEYWORDS", "RELATIVE_TOLERANCE", "VARIABLES", "evaluate_expression", "select_nodes"]
+__all__ = [
+    "CONSTANTS",
+    "FUNCTIONS",
+    "KEYWORDS",
+    "RELATIVE_TOLERANCE",
+    "VARIABLES",
+    "evaluate_expression",
+    "select_nodes",
+]
 
 VARIABLES = ("x", "y", "z", "r", "theta")
 CONSTANTS = {"pi": math.pi}
@@ -76,6 +84,7 @@ class _ParseError(Exception):
 
 
 # -- syntax tree: each node knows whether it is a condition (boolean) or a number ----------
+
 
 @dataclass(frozen=True)
 class _Number:
@@ -157,8 +166,9 @@ class _Parser:
     def unexpected(self, expected: str = "") -> _ParseError:
         token = self.token
         found = "end" if token.kind == "end" else repr(token.text)
-        return _ParseError(f"unexpected {found}", token.column, f" (expected {expected})"
-                           if expected else "")
+        return _ParseError(
+            f"unexpected {found}", token.column, f" (expected {expected})" if expected else ""
+        )
 
     def parse(self):
         if self.token.kind == "end":
@@ -260,9 +270,7 @@ class _Parser:
     def call(self, name: _Token):
         count, _ = FUNCTIONS[name.text]
         if not self.at("("):
-            raise _ParseError(
-                f"{name.text} is a function: write {name.text}(...)", name.column
-            )
+            raise _ParseError(f"{name.text} is a function: write {name.text}(...)", name.column)
         self.take()
         arguments = [self.sum()]
         while self.at(","):
@@ -311,7 +319,11 @@ def _variables_used(tree) -> list[str]:
 
 
 _ARITHMETIC = {
-    "+": np.add, "-": np.subtract, "*": np.multiply, "/": np.divide, "**": np.power,
+    "+": np.add,
+    "-": np.subtract,
+    "*": np.multiply,
+    "/": np.divide,
+    "**": np.power,
 }
 
 
@@ -379,8 +391,9 @@ def _first_nan(tree, variables: dict[str, np.ndarray]) -> int | None:
     """Index of the first node at which an operand of a comparison in tree is NaN."""
     if isinstance(tree, _Comparison):
         for operand in tree.operands:
-            value = np.broadcast_to(_as_number(_evaluate(operand, variables, 0.0)),
-                                    variables["x"].shape)
+            value = np.broadcast_to(
+                _as_number(_evaluate(operand, variables, 0.0)), variables["x"].shape
+            )
             bad = np.flatnonzero(np.isnan(value))
             if bad.size:
                 return int(bad[0])
@@ -415,15 +428,21 @@ def select_nodes(mesh: Mesh, selector: str, tolerance: float | None = None) -> n
         if name in mesh.node_sets:
             nodes = np.unique(mesh.node_sets[name])
             if nodes.size == 0:
-                raise ValueError(f'selector "{selector}" matches no node (node set "{name}" '
-                                 "is empty)")
+                raise ValueError(
+                    f'selector "{selector}" matches no node (node set "{name}" is empty)'
+                )
             return nodes
     if tolerance is None:
         tolerance = RELATIVE_TOLERANCE * mesh_size(mesh)
-    elif (isinstance(tolerance, bool) or not isinstance(tolerance, Real)
-          or not math.isfinite(tolerance) or tolerance < 0):
-        raise ValueError(f'selector "{selector}": tolerance must be a finite number >= 0, '
-                         f"got {tolerance!r}")
+    elif (
+        isinstance(tolerance, bool)
+        or not isinstance(tolerance, Real)
+        or not math.isfinite(tolerance)
+        or tolerance < 0
+    ):
+        raise ValueError(
+            f'selector "{selector}": tolerance must be a finite number >= 0, got {tolerance!r}'
+        )
     tree = _parse(selector, "selector", tuple(mesh.node_sets))
     if not tree.is_condition:
         raise ValueError(
@@ -451,9 +470,7 @@ def select_nodes(mesh: Mesh, selector: str, tolerance: float | None = None) -> n
     return nodes
 
 
-def evaluate_expression(
-    text: str | float, nodes: np.ndarray, tolerance: float = 0.0
-) -> np.ndarray:
+def evaluate_expression(text: str | float, nodes: np.ndarray, tolerance: float = 0.0) -> np.ndarray:
     """Value of an expression of the reference coordinates at each node, shape (k,).
 
     text: an expression in the selector language (module docstring), e.g. "0.1 * y" or

@@ -133,8 +133,12 @@ class DiscreteSystem:
             elements = np.flatnonzero(material_of_element == index)
             if elements.size:
                 self.groups.append(
-                    (elements, MembraneElements(geometry.subset(elements), material,
-                                                compiled=self.compiled))
+                    (
+                        elements,
+                        MembraneElements(
+                            geometry.subset(elements), material, compiled=self.compiled
+                        ),
+                    )
                 )
         order = np.concatenate([elements for elements, _ in self.groups])
         self._inverse_order = np.argsort(order) if len(self.groups) > 1 else None
@@ -179,7 +183,9 @@ class DiscreteSystem:
         for start in range(0, g.n_elements, KERNEL_BLOCK):
             block = slice(start, min(start + KERNEL_BLOCK, g.n_elements))
             self.pattern.add_to_data(
-                data, block, unit_tension_stiffness(g.area[block], g.shape_gradient[block]),
+                data,
+                block,
+                unit_tension_stiffness(g.area[block], g.shape_gradient[block]),
                 compiled=self.compiled,
             )
         return data
@@ -285,9 +291,7 @@ class DiscreteSystem:
             x = self._loaded_coordinates(u, loaded, x_elements)
             pressure = load_factor * self.loading.pressure[loaded]
             if self.compiled:
-                compiled.add_pressure_forces(
-                    forces, self.pattern.element_dofs[loaded], x, pressure
-                )
+                compiled.add_pressure_forces(forces, self.pattern.element_dofs[loaded], x, pressure)
             else:
                 f, _ = pressure_forces(x, pressure, stiffness=False)
                 forces += np.bincount(
@@ -300,8 +304,7 @@ class DiscreteSystem:
                     sink(elements, pressure_forces(x[block], pressure[block])[1])
         for edge_load in self.loading.follower_edges:
             triples = edge_load.edges
-            f, k = edge_follower_forces(x_nodes[triples], load_factor * edge_load.normal,
-                                        stiffness)
+            f, k = edge_follower_forces(x_nodes[triples], load_factor * edge_load.normal, stiffness)
             dofs = (3 * triples[:, :, None] + np.arange(3)).reshape(-1, 9)
             forces += np.bincount(dofs.ravel(), f.ravel(), minlength=self.n_dofs)
             if stiffness:

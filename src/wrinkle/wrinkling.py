@@ -32,9 +32,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from wrinkle import compiled as kernels
-from wrinkle.materials.base import Material
+from wrinkle.materials.base import Material, tangent_of
 
-__all__ = ["SLACK", "STATE_NAMES", "TAUT", "WRINKLED", "Wrinkling", "WrinklingError", "WrinklingResponse"]
+__all__ = [
+    "SLACK",
+    "STATE_NAMES",
+    "TAUT",
+    "WRINKLED",
+    "Wrinkling",
+    "WrinklingError",
+    "WrinklingResponse",
+]
 
 TAUT, WRINKLED, SLACK = 0, 1, 2
 STATE_NAMES = ("taut", "wrinkled", "slack")
@@ -170,7 +178,8 @@ class Wrinkling:
         plain = self.material.response(C, tangent=tangent)
         state = self.classify(C, plain.stress)
         stress = plain.stress.copy()
-        stiffness = plain.tangent.copy() if tangent else None
+        plain_tangent = tangent_of(plain) if tangent else None
+        stiffness = None if plain_tangent is None else plain_tangent.copy()
         thickness = plain.thickness.copy()
         phi = np.zeros(n)
         b = np.zeros(n)
@@ -182,7 +191,7 @@ class Wrinkling:
 
         slack = state == SLACK
         stress[slack] = 0.0
-        if tangent:
+        if stiffness is not None:
             stiffness[slack] = 0.0
         thickness[slack] = self.material.thickness
 
@@ -191,7 +200,9 @@ class Wrinkling:
             Cw = C[wrinkled]
             try:
                 phi_w, b_w, (c_w, s_w) = self._solve_conditions(
-                    Cw, plain.stress[wrinkled], plain.tangent[wrinkled] if tangent else None
+                    Cw,
+                    plain.stress[wrinkled],
+                    None if plain_tangent is None else plain_tangent[wrinkled],
                 )
             except WrinklingError as error:  # rows of the wrinkled subset -> rows of C
                 raise WrinklingError(wrinkled[error.elements]) from None
@@ -202,10 +213,10 @@ class Wrinkling:
             energy[wrinkled] = self.material.energy(C_modified)
             phi[wrinkled] = phi_w
             b[wrinkled] = b_w
-            if tangent:
+            if stiffness is not None:
                 wrinkled_tangent = kernels.wrinkled_tangent if compiled else self._wrinkled_tangent
                 stiffness[wrinkled] = wrinkled_tangent(
-                    c_w, s_w, b_w, modified.stress, modified.tangent
+                    c_w, s_w, b_w, modified.stress, tangent_of(modified)
                 )
         return WrinklingResponse(state, stress, stiffness, thickness, phi, b, energy)
 
@@ -214,8 +225,9 @@ class Wrinkling:
     # of tiny matrices, explicit multiply-adds are several times faster than einsum/matmul.
     # The wrinkle direction w = (c, s) = (cos phi, sin phi) is passed along with phi, so that
     # each angle's cosine and sine are computed once.
-    def _modified_response(self, e: tuple, c: np.ndarray, s: np.ndarray, b: np.ndarray,
-                           tangent: bool):
+    def _modified_response(
+        self, e: tuple, c: np.ndarray, s: np.ndarray, b: np.ndarray, tangent: bool
+    ):
         """Material response at C' = C + b w (x) w from the Voigt strain e of C (components,
         each (m,)), w = (c, s), b (m,); also returns m = (w1^2/2, w2^2/2, w1 w2) and c^2, s^2
         as components."""
@@ -323,7 +335,7 @@ class Wrinkling:
         """
         e = (0.5 * (C[:, 0, 0] - 1.0), 0.5 * (C[:, 1, 1] - 1.0), C[:, 0, 1])
         if plain_tangent is None:
-            plain_tangent = self.material.response(C, tangent=True).tangent
+            plain_tangent = tangent_of(self.material.response(C, tangent=True))
         # |g| can be no smaller than round-off in E = (C - I)/2 times the stiffness
         stiffness = _row_norms(plain_tangent.reshape(-1, 9))
         g_tolerance = np.maximum(

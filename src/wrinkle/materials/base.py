@@ -27,6 +27,7 @@ __all__ = [
     "as_cauchy_green_batch",
     "green_lagrange_voigt",
     "rotate_voigt_tangent",
+    "tangent_of",
     "tangent_is_isotropic",
     "tangent_to_voigt",
     "tensor_from_voigt_stress",
@@ -47,6 +48,17 @@ class MembraneResponse:
     stress: np.ndarray
     tangent: np.ndarray | None
     thickness: np.ndarray
+
+
+class _WithTangent(Protocol):
+    tangent: np.ndarray | None
+
+
+def tangent_of(response: _WithTangent) -> np.ndarray:
+    """The tangent (n, 3, 3) of a response that was asked for it (ValueError if it has none)."""
+    if response.tangent is None:
+        raise ValueError("the material response was evaluated without its tangent")
+    return response.tangent
 
 
 @runtime_checkable

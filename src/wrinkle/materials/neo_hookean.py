@@ -124,6 +124,8 @@ class NeoHookean:
         step leaving the bracket (possible only by round-off) is replaced by bisection.
         """
         mu, lmbda = self.mu, self.lmbda
+        if lmbda is None:
+            raise ValueError("the incompressible law has no C33 equation to solve")
         lo = np.minimum(0.0, -ln_det)
         hi = -lmbda * ln_det / (2.0 * mu + lmbda)
         x = hi.copy()

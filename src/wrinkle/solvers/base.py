@@ -14,7 +14,20 @@ import scipy.sparse as sp
 from wrinkle.solvers.linear import SymmetryCheck, diagonal_positions, make_linear_solver
 from wrinkle.timing import LINEAR, Stopwatch
 
-__all__ = ["ConvergenceError", "Evaluation", "EvaluationFailure", "LinearSolver", "Problem", "RegularisedSolver", "SolverResult", "is_converged", "log_iteration", "shifted", "stiffness_scale", "try_evaluate"]
+__all__ = [
+    "ConvergenceError",
+    "Evaluation",
+    "EvaluationFailure",
+    "LinearSolver",
+    "Problem",
+    "RegularisedSolver",
+    "SolverResult",
+    "is_converged",
+    "log_iteration",
+    "shifted",
+    "stiffness_scale",
+    "try_evaluate",
+]
 
 logger = logging.getLogger("wrinkle.solver")
 
@@ -110,8 +123,9 @@ class EvaluationFailure(RuntimeError):
     """A trial configuration could not be evaluated (e.g. a collapsed element)."""
 
 
-def try_evaluate(problem: Problem, u: np.ndarray, stiffness: bool = True,
-                 **options) -> Evaluation | None:
+def try_evaluate(
+    problem: Problem, u: np.ndarray, stiffness: bool = True, **options
+) -> Evaluation | None:
     """Evaluate a trial point; None if it is not admissible (the solver then shortens the step).
     ``options`` go to ``problem.evaluate``."""
     try:
@@ -127,9 +141,7 @@ def try_evaluate(problem: Problem, u: np.ndarray, stiffness: bool = True,
 def is_converged(evaluation: Evaluation, tolerance: float) -> bool:
     """Residual-force criterion |f - f*| <= tolerance * max(|f_ext|, |reactions|), or a
     residual at the level of round-off."""
-    return evaluation.residual_norm <= max(
-        tolerance * evaluation.force_scale, evaluation.round_off
-    )
+    return evaluation.residual_norm <= max(tolerance * evaluation.force_scale, evaluation.round_off)
 
 
 def stiffness_scale(K: sp.csr_matrix, free: np.ndarray) -> float:
@@ -139,8 +151,9 @@ def stiffness_scale(K: sp.csr_matrix, free: np.ndarray) -> float:
     return scale if scale > 0.0 else 1.0
 
 
-def shifted(K: sp.csr_matrix, shift: complex, free: np.ndarray,
-            diagonal: np.ndarray | None = None) -> sp.csr_matrix:
+def shifted(
+    K: sp.csr_matrix, shift: complex, free: np.ndarray, diagonal: np.ndarray | None = None
+) -> sp.csr_matrix:
     """K + shift I on the free dofs (the constrained diagonal stays one), on K's own pattern.
 
     diagonal: (n_dofs,) positions of the diagonal entries in K.data (computed if None).
@@ -152,15 +165,19 @@ def shifted(K: sp.csr_matrix, shift: complex, free: np.ndarray,
     return sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
 
 
-def log_iteration(method: str, iteration: int, evaluation: Evaluation,
-                  theta: float | None) -> None:
+def log_iteration(method: str, iteration: int, evaluation: Evaluation, theta: float | None) -> None:
     """One line per iteration on the ``wrinkle.solver`` logger (theta None: not yet chosen)."""
     taut, wrinkled, slack = evaluation.states
     logger.info(
-        "%s iteration %3d: residual %.3e (scale %.3e), theta %s, "
-        "taut %d, wrinkled %d, slack %d",
-        method, iteration, evaluation.residual_norm, evaluation.force_scale,
-        "-" if theta is None else f"{theta:.2e}", taut, wrinkled, slack,
+        "%s iteration %3d: residual %.3e (scale %.3e), theta %s, taut %d, wrinkled %d, slack %d",
+        method,
+        iteration,
+        evaluation.residual_norm,
+        evaluation.force_scale,
+        "-" if theta is None else f"{theta:.2e}",
+        taut,
+        wrinkled,
+        slack,
     )
 
 
@@ -182,8 +199,12 @@ class RegularisedSolver(ABC):
     tangent_predictor = True
     max_rejections = 40
 
-    def __init__(self, tolerance: float = 1e-6, max_iterations: int | None = None,
-                 linear_solver: str = "auto"):
+    def __init__(
+        self,
+        tolerance: float = 1e-6,
+        max_iterations: int | None = None,
+        linear_solver: str = "auto",
+    ):
         if not tolerance > 0:
             raise ValueError(f"solver tolerance must be > 0, got {tolerance}")
         if max_iterations is None:
@@ -266,8 +287,9 @@ class RegularisedSolver(ABC):
         a new step is factorised). None here; a subclass may search."""
         return None
 
-    def solve(self, problem: Problem, u0: np.ndarray,
-              at_start: Evaluation | None = None) -> SolverResult:
+    def solve(
+        self, problem: Problem, u0: np.ndarray, at_start: Evaluation | None = None
+    ) -> SolverResult:
         """Solve from u0 (prescribed values already set); raise ConvergenceError if it fails.
         at_start: problem's evaluation at u0 if the caller has it, with or without stiffness;
         a start already in balance then costs no evaluation of the stiffness."""

@@ -29,8 +29,10 @@ import importlib.metadata
 import logging
 import os
 from collections.abc import Callable
+from typing import cast
 
 import numpy as np
+import numpy.typing as npt
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -68,8 +70,12 @@ class SuperLU:
     def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
         """LU of A (real or complex); None if it is exactly singular."""
         try:
-            lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                           options={"SymmetricMode": True})
+            lu = spla.splu(
+                A.tocsc(),
+                permc_spec="MMD_AT_PLUS_A",
+                diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True},
+            )
         except RuntimeError as error:  # "Factor is exactly singular"
             logger.debug("factorisation failed: %s", error)
             return None
@@ -79,19 +85,25 @@ class SuperLU:
 class _PatternCache:
     """Remembers the pattern (indptr, indices) whose ordering a back-end has analysed."""
 
-    def __init__(self):
-        self._indptr = self._indices = None
-        self._source_indptr = self._source_indices = None
+    def __init__(self) -> None:
+        self._indptr: np.ndarray | None = None
+        self._indices: np.ndarray | None = None
+        self._source_indptr: np.ndarray | None = None
+        self._source_indices: np.ndarray | None = None
 
-    def same(self, A: sp.csr_matrix) -> bool:
+    def same(self, A: sp.csr_matrix | sp.csc_matrix) -> bool:
         # the model's pattern arrays are never changed in place: the same objects, same pattern
         if A.indptr is self._source_indptr and A.indices is self._source_indices:
             return True
         self._source_indptr, self._source_indices = A.indptr, A.indices
-        if self._indptr is not None and self._indptr.shape == A.indptr.shape \
-                and self._indices.shape == A.indices.shape \
-                and np.array_equal(self._indptr, A.indptr) \
-                and np.array_equal(self._indices, A.indices):
+        if (
+            self._indptr is not None
+            and self._indices is not None
+            and self._indptr.shape == A.indptr.shape
+            and self._indices.shape == A.indices.shape
+            and np.array_equal(self._indptr, A.indptr)
+            and np.array_equal(self._indices, A.indices)
+        ):
             return True
         self._indptr, self._indices = A.indptr.copy(), A.indices.copy()
         return False
@@ -111,16 +123,19 @@ class SymmetryCheck:
         if not self._pattern.same(A):
             nnz = A.nnz
             index = np.int32 if nnz < np.iinfo(np.int32).max else np.int64
-            positions = sp.csr_matrix((np.arange(1, nnz + 1, dtype=index), A.indices,
-                                       A.indptr), shape=A.shape).T.tocsr()
+            numbers = cast("npt.NDArray[np.int64]", np.arange(1, nnz + 1, dtype=index))
+            positions = sp.csr_matrix((numbers, A.indices, A.indptr), shape=A.shape).T.tocsr()
             positions.sort_indices()
-            same = (np.array_equal(positions.indptr, A.indptr)
-                    and np.array_equal(positions.indices, A.indices))
+            same = np.array_equal(positions.indptr, A.indptr) and np.array_equal(
+                positions.indices, A.indices
+            )
             self._transpose = positions.data - 1 if same else None
         if self._transpose is None:
             return False
-        return bool(np.linalg.norm(A.data - A.data[self._transpose])
-                    <= relative_tolerance * np.linalg.norm(A.data))
+        return bool(
+            np.linalg.norm(A.data - A.data[self._transpose])
+            <= relative_tolerance * np.linalg.norm(A.data)
+        )
 
 
 def upper_triangle_positions(A: sp.csr_matrix):
@@ -174,7 +189,8 @@ class Pardiso:
 
         self._solvers = {mtype: pypardiso.PyPardisoSolver(mtype=mtype) for mtype in (1, -2)}
         self._analysed = {mtype: _PatternCache() for mtype in (1, -2)}
-        self._upper = None  # upper_triangle_positions of the pattern in _upper_pattern
+        # upper_triangle_positions of the pattern in _upper_pattern
+        self._upper: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._upper_pattern = _PatternCache()
         self._fallback = SuperLU()
 
@@ -186,9 +202,10 @@ class Pardiso:
         A = A if A.has_sorted_indices else A.sorted_indices()
         M, mtype = A, 1
         if symmetric:
-            if not self._upper_pattern.same(A):
-                self._upper = upper_triangle_positions(A)
-            positions, indptr, indices = self._upper
+            upper = self._upper
+            if not self._upper_pattern.same(A) or upper is None:
+                upper = self._upper = upper_triangle_positions(A)
+            positions, indptr, indices = upper
             M, mtype = sp.csr_matrix((A.data[positions], indices, indptr), shape=A.shape), -2
         solver = self._solvers[mtype]
         rhs = np.zeros((A.shape[0], 1))
@@ -226,11 +243,11 @@ class Cholmod:
     def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
         if not symmetric or np.iscomplexobj(A.data):
             return self._fallback.factorise(A, symmetric)
-        A = A.tocsc()  # the same matrix for a symmetric one, in CHOLMOD's format
+        A_csc = A.tocsc()  # the same matrix for a symmetric one, in CHOLMOD's format
         try:
-            if self._factor is None or not self._pattern.same(A):
-                self._factor = self._cholmod.analyze(A, mode="supernodal")
-            self._factor.cholesky_inplace(A)
+            if self._factor is None or not self._pattern.same(A_csc):
+                self._factor = self._cholmod.analyze(A_csc, mode="supernodal")
+            self._factor.cholesky_inplace(A_csc)
         except self._cholmod.CholmodNotPositiveDefiniteError:
             return None
         return self._factor.solve_A
@@ -256,8 +273,9 @@ class AlgebraicMultigrid:
         preconditioner = hierarchy.aspreconditioner(cycle="V")
 
         def solve(b: np.ndarray) -> np.ndarray:
-            x, info = spla.cg(A, b, rtol=self.relative_tolerance, maxiter=self.max_iterations,
-                              M=preconditioner)
+            x, info = spla.cg(
+                A, b, rtol=self.relative_tolerance, maxiter=self.max_iterations, M=preconditioner
+            )
             if info != 0:
                 logger.debug("AMG-CG did not converge (info %d)", info)
                 return np.full_like(b, np.nan)  # the nonlinear solver rejects the step
@@ -266,8 +284,12 @@ class AlgebraicMultigrid:
         return solve
 
 
-LINEAR_SOLVERS = {"superlu": SuperLU, "pardiso": Pardiso, "cholmod": Cholmod,
-                  "amg": AlgebraicMultigrid}
+LINEAR_SOLVERS = {
+    "superlu": SuperLU,
+    "pardiso": Pardiso,
+    "cholmod": Cholmod,
+    "amg": AlgebraicMultigrid,
+}
 #: How to install the package each optional back-end needs, for the messages.
 INSTALL_HINTS = {
     "pardiso": 'pypardiso: install it with pip install "wrinkle[fast]" (x86-64 only)',

@@ -82,31 +82,56 @@ class SolverSettings:
     def __post_init__(self) -> None:
         _check("method", self.method, self.method in SOLVERS, f"one of {sorted(SOLVERS)}")
         names = ["auto", *LINEAR_SOLVERS]
-        _check("linear_solver", self.linear_solver, self.linear_solver in names,
-               f"one of {names}")
-        _check("tolerance", self.tolerance, _is_number(self.tolerance) and self.tolerance > 0,
-               "a number > 0")
+        _check("linear_solver", self.linear_solver, self.linear_solver in names, f"one of {names}")
+        _check(
+            "tolerance",
+            self.tolerance,
+            _is_number(self.tolerance) and self.tolerance > 0,
+            "a number > 0",
+        )
         if self.max_iterations is not None:
-            _check("max_iterations", self.max_iterations,
-                   isinstance(self.max_iterations, int) and not isinstance(self.max_iterations, bool)
-                   and self.max_iterations >= 1, "an integer >= 1")
-        _check("steps", self.steps,
-               isinstance(self.steps, int) and not isinstance(self.steps, bool) and self.steps >= 1,
-               "an integer >= 1")
-        _check("min_step", self.min_step, _is_number(self.min_step) and self.min_step > 0,
-               "a number > 0")
+            _check(
+                "max_iterations",
+                self.max_iterations,
+                isinstance(self.max_iterations, int)
+                and not isinstance(self.max_iterations, bool)
+                and self.max_iterations >= 1,
+                "an integer >= 1",
+            )
+        _check(
+            "steps",
+            self.steps,
+            isinstance(self.steps, int) and not isinstance(self.steps, bool) and self.steps >= 1,
+            "an integer >= 1",
+        )
+        _check(
+            "min_step",
+            self.min_step,
+            _is_number(self.min_step) and self.min_step > 0,
+            "a number > 0",
+        )
         if self.max_step is not None:
-            _check("max_step", self.max_step,
-                   _is_number(self.max_step) and self.min_step <= self.max_step <= 1,
-                   f"a number in [min_step, 1] = [{self.min_step:g}, 1]")
-        _check("cutback", self.cutback, _is_number(self.cutback) and 0 < self.cutback < 1,
-               "a number in (0, 1)")
-        _check("growth", self.growth, _is_number(self.growth) and self.growth >= 1,
-               "a number >= 1")
-        _check("target_iterations", self.target_iterations,
-               isinstance(self.target_iterations, int)
-               and not isinstance(self.target_iterations, bool) and self.target_iterations >= 0,
-               "an integer >= 0")
+            _check(
+                "max_step",
+                self.max_step,
+                _is_number(self.max_step) and self.min_step <= self.max_step <= 1,
+                f"a number in [min_step, 1] = [{self.min_step:g}, 1]",
+            )
+        _check(
+            "cutback",
+            self.cutback,
+            _is_number(self.cutback) and 0 < self.cutback < 1,
+            "a number in (0, 1)",
+        )
+        _check("growth", self.growth, _is_number(self.growth) and self.growth >= 1, "a number >= 1")
+        _check(
+            "target_iterations",
+            self.target_iterations,
+            isinstance(self.target_iterations, int)
+            and not isinstance(self.target_iterations, bool)
+            and self.target_iterations >= 0,
+            "an integer >= 0",
+        )
 
     def replace(self, **changes: Any) -> SolverSettings:
         """A copy with some fields changed (values None are ignored); TypeError for a name
