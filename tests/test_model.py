@@ -82,3 +82,27 @@ def test_solve_with_selectors_equals_solve_with_indices():
     np.testing.assert_array_equal(
         by_name.solve().final.displacement, by_index.solve().final.displacement
     )
+
+
+def test_set_prescribed_and_nodal_forces_replace_values():
+    """Setting the values of held components or the dead forces changes the solution as a
+    model defined with them from the start would, keeps the supports, and refuses a value
+    for a free component."""
+    mesh, model = sheet()
+    model.fix("bottom", label="bottom")
+    model.prescribe("top", (0.0, 0.01, 0.0), label="top")
+    model.solve()
+    model.set_prescribed("top", (0.02, np.nan, np.nan))  # x changed, y and z as they were
+    model.set_nodal_forces(np.tile([0.0, 0.0, 1e-4], mesh.n_nodes))
+    _, fresh = sheet()
+    fresh.fix("bottom", label="bottom")
+    fresh.prescribe("top", (0.02, 0.01, 0.0), label="top")
+    fresh.add_nodal_force(np.arange(mesh.n_nodes), (0.0, 0.0, 1e-4))
+    assert [s.label for s in model.supports] == ["bottom", "top"]
+    np.testing.assert_array_equal(
+        model.solve().final.displacement, fresh.solve().final.displacement
+    )
+    with pytest.raises(ValueError, match="is free in x"):
+        model.set_prescribed("y == 0.5", (0.1, 0.0, 0.0))
+    with pytest.raises(ValueError, match="75 components"):
+        model.set_nodal_forces(np.zeros(3))

@@ -257,6 +257,34 @@ class Model:
         np.add.at(self.forces, DOFS_PER_NODE * chosen[:, None] + np.arange(3), values)
         self._changed()
 
+    def set_nodal_forces(self, forces: ArrayLike) -> None:
+        """Replace all dead nodal forces at load factor 1 (those of ``add_nodal_force``, dead
+        edge loads and gravity) by ``forces``, (n_dofs,) or (n_nodes, 3)."""
+        values = np.asarray(forces, dtype=float).reshape(-1)
+        if values.shape != self.forces.shape:
+            raise ValueError(f"nodal forces must have {self.n_dofs} components, got {values.size}")
+        if not np.all(np.isfinite(values)):
+            raise ValueError("nodal force must be finite")
+        self.forces[:] = values
+        self._changed()
+
+    def set_prescribed(self, nodes: NodeSelection, displacement: ArrayLike) -> None:
+        """Change the values at load factor 1 of components already held (by ``fix`` or
+        ``prescribe``): displacement (3,) or (k, 3), a NaN component left as it is. The
+        supports and their labels stay; ValueError for a value on a free component."""
+        chosen = self._node_indices(nodes)
+        values = np.broadcast_to(np.asarray(displacement, dtype=float), (chosen.size, 3))
+        dofs = DOFS_PER_NODE * chosen[:, None] + np.arange(3)
+        given = ~np.isnan(values)
+        free = given & ~self.constrained[dofs]
+        if np.any(free):
+            node, component = np.argwhere(free)[0]
+            raise ValueError(
+                f"node {chosen[node]} is free in {'xyz'[component]}: prescribe it to hold it"
+            )
+        self.prescribed[dofs[given]] = values[given]
+        self._changed()
+
     def add_pressure(self, value: float, elements: ElementSelection = None) -> None:
         """Follower pressure (force per unit current area) on ``elements`` (None = all),
         positive along the element normal (x2 - x1) x (x3 - x1), reached at load factor 1."""

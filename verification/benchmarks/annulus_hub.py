@@ -9,7 +9,6 @@ rotation, ring-mean stresses, the angle of the tension lines.
 
 from __future__ import annotations
 
-import copy
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -145,9 +144,9 @@ class _HubModel:
 
     The case file holds the hub (support "hub", x and y) and pulls the outer edge with the
     dead radial tension N0; ``solve`` adds the torque as dead circumferential nodal forces
-    T / (n |X|) e_theta on the n outer nodes (their moment about the axis is T) to a copy of
-    the case's model, solves in one proportional step with the case's solver settings and
-    reads the results.
+    T / (n |X|) e_theta on the n outer nodes (their moment about the axis is T) to the case's
+    forces (``Model.set_nodal_forces``), solves in one proportional step with the case's
+    solver settings and reads the results.
     """
 
     def __init__(self, case: Path, setup: _Setup, n_radial: int, n_circumferential: int):
@@ -188,10 +187,10 @@ class _HubModel:
         """Solve at torque T (force x length) with the case's N0, both times ``load_scale``,
         from u0 (default: the flat unstressed membrane)."""
         X = self.model.mesh.nodes
-        model = copy.deepcopy(self.model)  # the case's model: the hub and the tension N0
-        added = (load_scale - 1.0) * self.base_forces.reshape(-1, 3)
-        added[self.outer] += load_scale * torque * self.torque_direction
-        model.add_nodal_force(np.arange(model.mesh.n_nodes), added)
+        model = self.model  # the case's model: the hub and the tension N0
+        forces = load_scale * self.base_forces.reshape(-1, 3)
+        forces[self.outer] += load_scale * torque * self.torque_direction
+        model.set_nodal_forces(forces)
         step = model.solve(self.case.settings, steps=1, u0=u0).final
         u = step.displacement
         x = X + u.reshape(-1, 3)

@@ -200,7 +200,7 @@ class _BentTube:
         plate_nodes = self.plate_dofs // 3  # the plate support's values at full load:
         plate = np.full((plate_nodes.size, 3), np.nan)  # x prescribed, y and z as they were
         plate[:, 0] = offset + np.sin(rotation) * mesh.nodes[plate_nodes, 1]
-        model.prescribe(plate_nodes, plate, label="tip plate")
+        model.set_prescribed(plate_nodes, plate)
         step = model.solve(self.case.settings, steps=1, u0=start).final
         u = step.displacement
         x = mesh.nodes + u.reshape(-1, 3)
