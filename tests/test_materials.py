@@ -385,6 +385,18 @@ def test_bad_shape_of_C_raises(material_name: str) -> None:
 E_ISO, NU_ISO = 2.0, 0.3
 
 
+def equal_moduli(nu_TT: float = NU_ISO, shear_factor: float = 1.0) -> StVenantKirchhoff:
+    """Transversely isotropic law with E_L = E_T, G_LT = shear_factor E / (2 (1 + nu))."""
+    return StVenantKirchhoff.transversely_isotropic(
+        E_L=E_ISO,
+        E_T=E_ISO,
+        nu_LT=NU_ISO,
+        nu_TT=nu_TT,
+        G_LT=shear_factor * E_ISO / (2.0 * (1.0 + NU_ISO)),
+        thickness=D0,
+    )
+
+
 @pytest.mark.parametrize(
     "build, expected",
     [
@@ -397,40 +409,10 @@ E_ISO, NU_ISO = 2.0, 0.3
             False,
         ),
         # E_L = E_T and G = E / (2 (1 + nu)): isotropic in the plane, whatever nu_TT
-        (
-            lambda: StVenantKirchhoff.transversely_isotropic(
-                E_L=E_ISO,
-                E_T=E_ISO,
-                nu_LT=NU_ISO,
-                nu_TT=NU_ISO,
-                G_LT=E_ISO / (2.0 * (1.0 + NU_ISO)),
-                thickness=D0,
-            ),
-            True,
-        ),
-        (
-            lambda: StVenantKirchhoff.transversely_isotropic(
-                E_L=E_ISO,
-                E_T=E_ISO,
-                nu_LT=NU_ISO,
-                nu_TT=0.1,
-                G_LT=E_ISO / (2.0 * (1.0 + NU_ISO)),
-                thickness=D0,
-            ),
-            True,
-        ),
+        (lambda: equal_moduli(), True),
+        (lambda: equal_moduli(nu_TT=0.1), True),
         # E_L = E_T but an inconsistent shear modulus: not isotropic
-        (
-            lambda: StVenantKirchhoff.transversely_isotropic(
-                E_L=E_ISO,
-                E_T=E_ISO,
-                nu_LT=NU_ISO,
-                nu_TT=NU_ISO,
-                G_LT=1.01 * E_ISO / (2.0 * (1.0 + NU_ISO)),
-                thickness=D0,
-            ),
-            False,
-        ),
+        (lambda: equal_moduli(shear_factor=1.01), False),
         (lambda: StVenantKirchhoff(random_spd_stiffness(), thickness=D0), False),
         (lambda: NeoHookean(mu=1.5, thickness=D0), True),
         (lambda: NeoHookean(mu=1.5, thickness=D0, lmbda=4.0), True),

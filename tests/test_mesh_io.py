@@ -80,8 +80,9 @@ GMSH_FIELDS = {  # name: (physical tag, dimension); tag 1 would clash without th
 }
 
 
-def test_gmsh22_physical_groups(tmp_path):
-    path = write(
+def write_gmsh_groups(tmp_path):
+    """The gmsh 2.2 file of GMSH_POINTS and GMSH_CELLS with their physical groups."""
+    return write(
         tmp_path,
         "groups.msh",
         GMSH_POINTS,
@@ -89,6 +90,10 @@ def test_gmsh22_physical_groups(tmp_path):
         cell_data={"gmsh:physical": GMSH_PHYSICAL, "gmsh:geometrical": GMSH_PHYSICAL},
         field_data=GMSH_FIELDS,
     )
+
+
+def test_gmsh22_physical_groups(tmp_path):
+    path = write_gmsh_groups(tmp_path)
     mesh = read_mesh(path)
     assert mesh.n_nodes == 6 and mesh.n_elements == 4
     sets = {name: nodes.tolist() for name, nodes in mesh.node_sets.items()}
@@ -415,14 +420,7 @@ def _element_data_section(name: str, rows: list[tuple[int, list[float]]]) -> str
 
 
 def test_gmsh22_element_data_in_any_order_with_quads_and_lines(tmp_path):
-    path = write(
-        tmp_path,
-        "groups.msh",
-        GMSH_POINTS,
-        GMSH_CELLS,
-        cell_data={"gmsh:physical": GMSH_PHYSICAL, "gmsh:geometrical": GMSH_PHYSICAL},
-        field_data=GMSH_FIELDS,
-    )
+    path = write_gmsh_groups(tmp_path)
     # meshio numbers the elements 1..6 in order: vertex, two lines, two triangles, the quad
     rows = [(6, [0.0, 1.0, 0.0]), (2, [9.0, 9.0, 9.0]), (5, [1.0, 1.0, 0.0]), (4, [1.0, 0.0, 0.0])]
     scalar = [(4, [0.5]), (5, [0.25]), (6, [2.0])]

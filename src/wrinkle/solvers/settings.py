@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -45,13 +46,12 @@ def make_solver(
     return cls(tolerance=tolerance, max_iterations=max_iterations, linear_solver=linear_solver)
 
 
-def _check(name: str, value: Any, ok: bool, requirement: str) -> None:
-    if not ok:
-        raise ValueError(f"solver {name} must be {requirement}, got {value!r}")
-
-
 def _is_number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _is_integer(value: Any, minimum: int) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= minimum
 
 
 @dataclass(frozen=True)
@@ -80,58 +80,51 @@ class SolverSettings:
     target_iterations: int = 6
 
     def __post_init__(self) -> None:
-        _check("method", self.method, self.method in SOLVERS, f"one of {sorted(SOLVERS)}")
-        names = ["auto", *LINEAR_SOLVERS]
-        _check("linear_solver", self.linear_solver, self.linear_solver in names, f"one of {names}")
-        _check(
-            "tolerance",
-            self.tolerance,
-            _is_number(self.tolerance) and self.tolerance > 0,
-            "a number > 0",
-        )
-        if self.max_iterations is not None:
-            _check(
+        linear_solvers = ["auto", *LINEAR_SOLVERS]
+        rules: list[tuple[str, Callable[[], bool], str]] = [
+            ("method", lambda: self.method in SOLVERS, f"one of {sorted(SOLVERS)}"),
+            (
+                "linear_solver",
+                lambda: self.linear_solver in linear_solvers,
+                f"one of {linear_solvers}",
+            ),
+            (
+                "tolerance",
+                lambda: _is_number(self.tolerance) and self.tolerance > 0,
+                "a number > 0",
+            ),
+            (
                 "max_iterations",
-                self.max_iterations,
-                isinstance(self.max_iterations, int)
-                and not isinstance(self.max_iterations, bool)
-                and self.max_iterations >= 1,
+                lambda: self.max_iterations is None or _is_integer(self.max_iterations, 1),
                 "an integer >= 1",
-            )
-        _check(
-            "steps",
-            self.steps,
-            isinstance(self.steps, int) and not isinstance(self.steps, bool) and self.steps >= 1,
-            "an integer >= 1",
-        )
-        _check(
-            "min_step",
-            self.min_step,
-            _is_number(self.min_step) and self.min_step > 0,
-            "a number > 0",
-        )
-        if self.max_step is not None:
-            _check(
+            ),
+            ("steps", lambda: _is_integer(self.steps, 1), "an integer >= 1"),
+            ("min_step", lambda: _is_number(self.min_step) and self.min_step > 0, "a number > 0"),
+            (
                 "max_step",
-                self.max_step,
-                _is_number(self.max_step) and self.min_step <= self.max_step <= 1,
-                f"a number in [min_step, 1] = [{self.min_step:g}, 1]",
-            )
-        _check(
-            "cutback",
-            self.cutback,
-            _is_number(self.cutback) and 0 < self.cutback < 1,
-            "a number in (0, 1)",
-        )
-        _check("growth", self.growth, _is_number(self.growth) and self.growth >= 1, "a number >= 1")
-        _check(
-            "target_iterations",
-            self.target_iterations,
-            isinstance(self.target_iterations, int)
-            and not isinstance(self.target_iterations, bool)
-            and self.target_iterations >= 0,
-            "an integer >= 0",
-        )
+                lambda: (
+                    self.max_step is None
+                    or (_is_number(self.max_step) and self.min_step <= self.max_step <= 1)
+                ),
+                f"a number in [min_step, 1] = [{self.min_step}, 1]",
+            ),
+            (
+                "cutback",
+                lambda: _is_number(self.cutback) and 0 < self.cutback < 1,
+                "a number in (0, 1)",
+            ),
+            ("growth", lambda: _is_number(self.growth) and self.growth >= 1, "a number >= 1"),
+            (
+                "target_iterations",
+                lambda: _is_integer(self.target_iterations, 0),
+                "an integer >= 0",
+            ),
+        ]
+        for name, holds, requirement in rules:
+            if not holds():
+                raise ValueError(
+                    f"solver {name} must be {requirement}, got {getattr(self, name)!r}"
+                )
 
     def replace(self, **changes: Any) -> SolverSettings:
         """A copy with some fields changed (values None are ignored); TypeError for a name
