@@ -28,7 +28,17 @@ from wrinkle.results import Results, StepResult
 from wrinkle.selectors import evaluate_expression, select_nodes
 from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS, ConvergenceError, SolverSettings
 
-__all__ = ["Case", "CaseError", "merged", "read_case", "read_case_data"]
+__all__ = [
+    "GENERATORS",
+    "LOAD_KINDS",
+    "MATERIAL_MODELS",
+    "SOLVER_KEYS",
+    "Case",
+    "CaseError",
+    "merged",
+    "read_case",
+    "read_case_data",
+]
 
 
 class CaseError(ValueError):
