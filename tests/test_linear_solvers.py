@@ -259,3 +259,24 @@ def test_case_file_names_the_linear_solver(tmp_path):
     case.write_text(text.replace('"superlu"', '"mumps"'))
     with pytest.raises(CaseError, match=r"\[solver\]: unknown linear_solver 'mumps'"):
         read_case(case)
+
+
+@pytest.mark.skipif(not installed("pardiso"), reason="pypardiso not installed")
+def test_auto_takes_pardiso_above_its_size_and_reaches_the_superlu_solution():
+    """The default back-end on a mesh above AUTO_PARDISO_DOFS unknowns (the shear-stretch
+    square, 84 x 84 nodes) is PARDISO when installed, and the path reaches SuperLU's
+    displacements (the homogeneous solution, to round-off)."""
+    from wrinkle.solvers import follow_load_path
+
+    overrides = {"mesh": {"rectangle": {"nx": 83, "ny": 83}}}
+    displacements = {}
+    for name in ("auto", "superlu"):
+        case = read_case(SHEAR_STRETCH, overrides)
+        system = case.model.discretise()
+        assert system.n_dofs > AUTO_PARDISO_DOFS
+        settings = case.settings.replace(linear_solver=name, tolerance=1e-10)
+        solver = settings.solver()
+        displacements[name] = follow_load_path(system, solver, settings.controller())
+        assert type(solver.linear).__name__ == ("Pardiso" if name == "auto" else "SuperLU")
+    u_ref = displacements["superlu"]
+    assert np.abs(displacements["auto"] - u_ref).max() <= 1e-9 * np.abs(u_ref).max()
