@@ -11,6 +11,7 @@ from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
 from wrinkle.post import element_report, material_response
+from wrinkle.refinement import refine, refined
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import select_nodes
 from wrinkle.solvers import ConvergenceError, SolverSettings
@@ -42,6 +43,8 @@ __all__ = [
     "read_case",
     "read_mesh",
     "rectangle",
+    "refine",
+    "refined",
     "select_nodes",
     "sphere",
 ]

@@ -24,6 +24,7 @@ from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
 from wrinkle.output import ResultWriter
+from wrinkle.refinement import refined
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import evaluate_expression, select_nodes
 from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS, ConvergenceError, SolverSettings
@@ -298,7 +299,7 @@ def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:
     if not isinstance(table, dict):
         reader.fail(where, "must be a table")
     sources = [key for key in ("file", *GENERATORS) if key in table]
-    reader.keys(table, where, set(), {"file", "units", *GENERATORS})
+    reader.keys(table, where, set(), {"file", "units", "refine", *GENERATORS})
     if len(sources) != 1:
         reader.fail(where, "give exactly one of 'file', " + ", ".join(f"'{g}'" for g in GENERATORS))
     units = {}
@@ -313,10 +314,13 @@ def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:
                 where, '\'units\' must be a string or a table such as {length = "m", force = "N"}'
             )
     source = sources[0]
+    times = 0
+    if "refine" in table:
+        times = int(reader.number(table, "refine", where, integer=True, minimum=0))
     try:
         if source == "file":
             file = folder / reader.string(table, "file", where)
-            return read_mesh(file), units
+            return refined(read_mesh(file), times), units
         generator, keys = GENERATORS[source]
         parameters = table[source]
         sub = f"[mesh] {source}"
@@ -334,7 +338,7 @@ def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:
             reader.number(parameters, key, sub, positive=True, integer=key.startswith("n"))
             for key in keys
         ]
-        return generator(*values), units
+        return refined(generator(*values), times), units
     except CaseError:
         raise
     except (ValueError, ImportError, OSError) as error:
