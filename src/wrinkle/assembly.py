@@ -34,14 +34,16 @@ def _sorted_unique(values: np.ndarray) -> np.ndarray:
 class SparsityPattern:
     """CSR pattern of the global stiffness of a triangle mesh with 3 dofs per node.
 
-    triangles: (n, 3) node indices; n_nodes: number of nodes.
+    triangles: (n, 3) node indices; n_nodes: number of nodes; coupled: (m, 2) further node
+    pairs whose blocks the pattern must hold (both orders), such as the nodes two apart that
+    the bending energy couples (``wrinkle.bending``).
     Attributes: ``element_dofs`` (n, 9), ``indptr``, ``indices``, ``element_to_data`` (n, 81)
     index into the CSR data of each element-matrix entry (int32 while nnz allows: 4 bytes
     per entry, 324 MB for 10^6 elements), ``diagonal`` (n_dofs,) index of each diagonal entry
     in the data.
     """
 
-    def __init__(self, triangles: np.ndarray, n_nodes: int):
+    def __init__(self, triangles: np.ndarray, n_nodes: int, coupled: np.ndarray | None = None):
         triangles = np.asarray(triangles, dtype=np.int64)
         n = triangles.shape[0]
         self.n_elements = n
@@ -56,7 +58,16 @@ class SparsityPattern:
         col_node = np.tile(triangles, (1, 3))  # (n, 9): b
         # every node gets its diagonal block, even one that no element uses
         element_keys = (row_node * n_nodes + col_node).ravel()
-        keys = _sorted_unique(np.concatenate([element_keys, np.arange(n_nodes) * (n_nodes + 1)]))
+        extra = np.zeros(0, dtype=np.int64)
+        if coupled is not None:
+            pairs = np.asarray(coupled, dtype=np.int64).reshape(-1, 2)
+            extra = np.concatenate(
+                [pairs[:, 0] * n_nodes + pairs[:, 1], pairs[:, 1] * n_nodes + pairs[:, 0]]
+            )
+        keys = _sorted_unique(
+            np.concatenate([element_keys, extra, np.arange(n_nodes) * (n_nodes + 1)])
+        )
+        self._keys = keys  # (row node, column node) of every block, as row n_nodes + column
         block = np.searchsorted(keys, element_keys).reshape(n, 3, 3)
         block_row = keys // n_nodes
         block_col = keys % n_nodes
@@ -142,6 +153,19 @@ class SparsityPattern:
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:
         """CSR matrix with this pattern and the given data (not copied)."""
         return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n_dofs, self.n_dofs))
+
+    def pair_positions(self, row_nodes: np.ndarray, column_nodes: np.ndarray) -> np.ndarray:
+        """Data positions of the entries (3 a + c, 3 b + c), c = 0, 1, 2, of the node pairs
+        (a, b) = (row_nodes, column_nodes), (m,) each, which must be blocks of the pattern
+        (ValueError otherwise). Returns (m, 3)."""
+        row_nodes = np.asarray(row_nodes, dtype=np.int64)
+        column_nodes = np.asarray(column_nodes, dtype=np.int64)
+        keys = row_nodes * self.n_nodes + column_nodes
+        block = np.searchsorted(self._keys, keys)
+        if np.any(self._keys[np.minimum(block, self._keys.size - 1)] != keys):
+            raise ValueError("a node pair is not in the sparsity pattern")
+        component = np.arange(DOFS_PER_NODE)
+        return self._position(row_nodes[:, None], block[:, None], component, component)
 
     def constraint_positions(self, constrained: np.ndarray) -> np.ndarray:
         """Data positions of all entries in a constrained row or column; constrained (n_dofs,)

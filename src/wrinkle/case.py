@@ -354,7 +354,7 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
     if name not in MATERIAL_MODELS:
         reader.fail(where, f"unknown model '{name}' (one of " + ", ".join(MATERIAL_MODELS) + ")")
     parameters = MATERIAL_MODELS[name]
-    optional = {"model", "direction", "angle", "region"} | (
+    optional = {"model", "direction", "angle", "region", "bending"} | (
         {"lmbda"} if name == "neo-hookean" else set()
     )
     reader.keys(table, where, {*parameters, "thickness"}, optional)
@@ -393,6 +393,26 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
         model.assign_material(material, elements, fibre_direction=direction, fibre_angle=angle)
     except ValueError as error:
         reader.fail(where, str(error))
+    if "bending" in table:
+        _read_bending(reader, model, table, where, elements)
+
+
+def _read_bending(
+    reader: _Reader, model: Model, table: dict, where: str, elements: np.ndarray | None
+) -> None:
+    """``bending = true`` (the material's own plate stiffness), ``false``, or a number D."""
+    value = table["bending"]
+    if value is False:
+        return
+    stiffness = None
+    if value is not True:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            reader.fail(where, f"'bending' must be true, false or a number >= 0, got {value!r}")
+        stiffness = float(reader.number(table, "bending", where, minimum=0))
+    try:
+        model.add_bending(stiffness, elements)
+    except ValueError as error:
+        reader.fail(where, f"'bending': {error}")
 
 
 def _read_support(reader: _Reader, model: Model, table: dict, where: str) -> None:

@@ -19,6 +19,8 @@ __all__ = [
     "require_meshio",
     "Mesh",
     "annulus",
+    "boundary_nodes",
+    "mesh_edges",
     "cylinder",
     "disk",
     "mesh_size",
@@ -126,6 +128,26 @@ def _sorted_unique(values: np.ndarray) -> np.ndarray:
     with some NumPy versions)."""
     values = np.sort(np.asarray(values).ravel())
     return values[np.concatenate([[True], values[1:] != values[:-1]])] if values.size else values
+
+
+def mesh_edges(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The mesh's edges: (n_edges, 2) node pairs, lower node first, sorted; each triangle's
+    edge numbers for its edges (a, b), (b, c), (c, a), (n_elements, 3); and how many
+    triangles share each edge, (n_edges,) (1 on the boundary)."""
+    n_nodes = mesh.n_nodes
+    pairs = np.sort(mesh.triangles[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2), axis=1)
+    keys = pairs[:, 0] * n_nodes + pairs[:, 1]
+    unique, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
+    edges = np.column_stack(np.divmod(unique, n_nodes))
+    return edges, inverse.reshape(-1, 3), counts
+
+
+def boundary_nodes(mesh: Mesh) -> np.ndarray:
+    """(n_nodes,) bool: the nodes on an edge that only one triangle has."""
+    edges, _, counts = mesh_edges(mesh)
+    boundary = np.zeros(mesh.n_nodes, dtype=bool)
+    boundary[edges[counts == 1].ravel()] = True
+    return boundary
 
 
 def mesh_size(mesh: Mesh) -> float:

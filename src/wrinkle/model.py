@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from wrinkle.assembly import DOFS_PER_NODE, SparsityPattern
+from wrinkle.bending import Bending, bending_stiffness, check_flat
 from wrinkle.kinematics import (
     ReferenceGeometry,
     material_frame,
@@ -98,8 +99,9 @@ class Model:
     Attributes: ``constrained`` (n_dofs,) bool and ``prescribed`` (n_dofs,) the supported
     components and their values at load factor 1, ``forces`` (n_dofs,) the dead nodal forces
     at load factor 1, ``supports`` (``Support``), ``pressure`` (n_elements,) the follower
-    pressure at load factor 1. Change them through the methods, which keep the discrete
-    system (``discretise``) up to date.
+    pressure at load factor 1, ``bending`` (n_elements,) the bending stiffness D of the mean
+    surface (zero: a membrane; ``add_bending``). Change them through the methods, which keep
+    the discrete system (``discretise``) up to date.
     """
 
     def __init__(
@@ -125,6 +127,8 @@ class Model:
         self.supports: list[Support] = []
         self.pressure = np.zeros(n)  # follower pressure at full load, per element
         self._edge_follower: list[FollowerEdgeLoad] = []
+        self.bending = np.zeros(n)  # bending stiffness D per element (add_bending)
+        self._bending: Bending | None = None  # kept until the bending stiffness changes
         self._pattern: SparsityPattern | None = None  # the mesh's, kept while it lives
         self._geometry: ReferenceGeometry | None = None  # kept until the materials change
         self._system: DiscreteSystem | None = None  # kept until anything changes
@@ -293,6 +297,36 @@ class Model:
         self.pressure[self._element_indices(elements)] += value
         self._changed()
 
+    def add_bending(
+        self, stiffness: float | None = None, elements: ElementSelection = None
+    ) -> None:
+        """Give ``elements`` (None = all) a bending stiffness on the mean surface
+        (``wrinkle.bending``): ``stiffness`` D (force x length), or None for each element's
+        material's own, t^2/12 times its in-plane stiffness (E t^3 / 12 (1 - nu^2) for an
+        isotropic sheet; ``bending_stiffness``). Replaces an earlier value on those elements.
+        For flat reference meshes only; ValueError for a curved one, a negative or non-finite
+        D, or an element without a material when D is None."""
+        check_flat(self.mesh)
+        chosen = self._element_indices(elements)
+        if stiffness is None:
+            groups = self._material_of_element[chosen]
+            if np.any(groups < 0):
+                first = chosen[groups < 0][0]
+                raise ValueError(
+                    f"element {first} has no material: assign it before add_bending(), or "
+                    "give the stiffness"
+                )
+            own = np.array([bending_stiffness(m.material) for m in self._materials])
+            values = own[groups]
+        else:
+            if not (np.isfinite(stiffness) and stiffness >= 0):
+                raise ValueError(f"bending stiffness must be finite and >= 0, got {stiffness}")
+            values = np.full(chosen.size, float(stiffness))
+        self.bending[chosen] = values
+        self._bending = None
+        self._pattern = None
+        self._changed()
+
     def add_gravity(
         self, acceleration: ArrayLike, density: float, elements: ElementSelection = None
     ) -> None:
@@ -408,8 +442,13 @@ class Model:
     def discretise(self) -> DiscreteSystem:
         """The discrete system of the model as it stands (made again after a change)."""
         if self._system is None:
+            if self._bending is None and np.any(self.bending > 0):
+                self._bending = Bending(self.mesh, self.bending)
             if self._pattern is None:
-                self._pattern = SparsityPattern(self.mesh.triangles, self.mesh.n_nodes)
+                coupled = None if self._bending is None else self._bending.coupled_pairs()
+                self._pattern = SparsityPattern(
+                    self.mesh.triangles, self.mesh.n_nodes, coupled=coupled
+                )
             self._system = DiscreteSystem(
                 self.mesh,
                 self._pattern,
@@ -419,6 +458,7 @@ class Model:
                 self.constrained.copy(),
                 self.prescribed.copy(),
                 Loading(self.forces.copy(), self.pressure.copy(), list(self._edge_follower)),
+                self._bending,
             )
         return self._system
 

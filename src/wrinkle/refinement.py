@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wrinkle.mesh import Mesh
+from wrinkle.mesh import Mesh, mesh_edges
 
 __all__ = ["MAX_REFINED_ELEMENTS", "Refinement", "refine", "refined"]
 
@@ -49,21 +49,10 @@ class Refinement:
         return np.concatenate([values, midpoints])
 
 
-def _edges(triangles: np.ndarray, n_nodes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Unique edges (n_edges, 2) (lower node first), each triangle's edge numbers
-    (n_elements, 3) for its edges (a, b), (b, c), (c, a), and how many triangles share each
-    edge (n_edges,)."""
-    pairs = np.sort(triangles[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2), axis=1)
-    keys = pairs[:, 0] * n_nodes + pairs[:, 1]
-    unique, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
-    edges = np.column_stack(np.divmod(unique, n_nodes))
-    return edges, inverse.reshape(-1, 3), counts
-
-
 def refine(mesh: Mesh) -> Refinement:
     """The mesh with each triangle split into four (module docstring)."""
     n_nodes, triangles = mesh.n_nodes, mesh.triangles
-    edges, edge_of, sharing = _edges(triangles, n_nodes)
+    edges, edge_of, sharing = mesh_edges(mesh)
     nodes = np.vstack([mesh.nodes, 0.5 * (mesh.nodes[edges[:, 0]] + mesh.nodes[edges[:, 1]])])
     a, b, c = triangles.T
     ab, bc, ca = (n_nodes + edge_of).T

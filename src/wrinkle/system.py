@@ -20,6 +20,7 @@ import numpy as np
 
 from wrinkle import compiled
 from wrinkle.assembly import SparsityPattern
+from wrinkle.bending import Bending
 from wrinkle.element import (
     KERNEL_BLOCK,
     ElementResult,
@@ -105,7 +106,9 @@ class DiscreteSystem:
     of all elements (material frames included); materials: one ``Wrinkling`` per group and
     material_of_element (n_elements,) the group of each element; constrained (n_dofs,) bool
     and prescribed (n_dofs,) the supported components and their values at load factor 1;
-    loading: the ``Loading`` at load factor 1.
+    loading: the ``Loading`` at load factor 1; bending: the bending energy of the mean
+    surface (``wrinkle.bending``), if the model has one; the pattern must then hold the node
+    pairs it couples.
     """
 
     def __init__(
@@ -118,6 +121,7 @@ class DiscreteSystem:
         constrained: np.ndarray,
         prescribed: np.ndarray,
         loading: Loading,
+        bending: Bending | None = None,
     ):
         self.mesh = mesh
         self.pattern = pattern
@@ -143,6 +147,12 @@ class DiscreteSystem:
         order = np.concatenate([elements for elements, _ in self.groups])
         self._inverse_order = np.argsort(order) if len(self.groups) > 1 else None
         self.force_round_off = self._force_round_off()
+        self.bending = bending
+        if bending is not None:
+            rows, columns, values = bending.entries()
+            # the constant bending stiffness, added to the tangent's data at these positions
+            self._bending_positions = pattern.pair_positions(rows, columns).ravel()
+            self._bending_values = np.repeat(values, 3)
         self._constraint_data: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     @property
@@ -347,8 +357,23 @@ class DiscreteSystem:
         return float(self.loading.pressure[loaded] @ pressure_volume(x))
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
-        """Global internal force vector f*, (n_dofs,)."""
-        return self.pattern.assemble_vector(self.evaluate_elements(u, stiffness=False).forces)
+        """Global internal force vector f* (membrane and bending), (n_dofs,)."""
+        forces = self.pattern.assemble_vector(self.evaluate_elements(u, stiffness=False).forces)
+        if self.bending is not None:
+            forces += self.bending.forces(u)
+        return forces
+
+    def add_bending(self, u: np.ndarray, internal: np.ndarray, data: np.ndarray | None) -> float:
+        """Add the bending's internal forces at u (n_dofs,) to ``internal`` and its stiffness
+        to the tangent's CSR data (None: no tangent), in place; returns its energy (zero
+        without bending)."""
+        if self.bending is None:
+            return 0.0
+        forces = self.bending.forces(u)
+        internal += forces
+        if data is not None:
+            data[self._bending_positions] += self._bending_values
+        return 0.5 * float(u @ forces)
 
     def reactions(self, u: np.ndarray, load_factor: float) -> np.ndarray:
         """Support reactions f* - f_ext at the constrained dofs (zero elsewhere), (n_dofs,)."""
@@ -433,8 +458,9 @@ class StepProblem:
             )
         with timer.part(ASSEMBLY):
             internal = pattern.assemble_vector(result.forces)
+            bending_energy = system.add_bending(u, internal, data if stiffness else None)
         external = self.forces
-        energy = float(np.sum(result.energy) - self.forces @ u)
+        energy = float(np.sum(result.energy) + bending_energy - self.forces @ u)
         if system.has_follower_loads:
             with timer.part(ELEMENTS):
                 follower, _ = system.follower_forces(
