@@ -3,11 +3,13 @@ meshes of about 10^3 .. 10^6 elements.
 
 Each mesh is solved in its own Python process (so that the peak resident set is that
 solve's): the quarter airbag of examples/airbag.toml inflated from the flat sheet at full
-pressure, and the unit square of examples/shear_stretch.toml (f = 5) under its boundary
-displacements. For each: elements, unknowns, load steps, Newton iterations, wall time split
-into element evaluation, assembly, linear solves and the rest (``Results.timings``), the peak
-resident set, and the result (airbag: centre deflection; square: top-edge force F1).
-The case's load steps are kept (no cut-back); a mesh whose step does not converge within
+pressure, the same airbag with the sheet's own bending stiffness on the mean surface
+(``airbag_bending``: ``[material] bending = true``, wrinkle.bending), and the unit square of
+examples/shear_stretch.toml (f = 5) under its boundary displacements. For each: elements,
+unknowns, load steps, Newton iterations, wall time split into element evaluation, assembly,
+linear solves and the rest (``Results.timings``), the peak resident set, and the result
+(airbag: centre deflection; square: top-edge force F1). The case's load steps are kept (no
+cut-back); a mesh whose step does not converge within
 ``--max-iterations`` is reported as not converged, with the time and memory it took. A mesh
 whose process is stopped by ``--time-limit`` is reported as not converged with what it did up
 to its last Newton iteration: the iterations, the time split and peak resident set at that
@@ -17,6 +19,8 @@ iteration to a progress file the parent reads (``Progress``). Prints a table and
 CSV.
 
     python benchmarks/scale.py --max-elements 200000 --linear-solver auto
+    python benchmarks/scale.py --problems airbag airbag_bending --sizes 23 71 224 708 \
+        --max-elements 2e6 --max-iterations 600
     python benchmarks/scale.py --problems airbag --sizes 708 --max-iterations 2   # cost of
         # the first Newton iterations on the 10^6-element airbag
 """
@@ -39,9 +43,20 @@ from table import write_csv
 ROOT = Path(__file__).resolve().parents[1]
 SIZES = {  # squares per side: 2 n^2 triangles
     "airbag": [23, 71, 224, 708],
+    "airbag_bending": [23, 71, 224, 708],
     "shear_stretch": [23, 71, 224, 708],
 }
-RESULT_NAMES = {"airbag": "centre deflection (mm)", "shear_stretch": "top-edge force F1"}
+# problem: (case file in examples/, overrides beyond the mesh)
+CASES = {
+    "airbag": ("airbag", {}),
+    "airbag_bending": ("airbag", {"material": {"bending": True}}),  # the sheet's own D
+    "shear_stretch": ("shear_stretch", {}),
+}
+RESULT_NAMES = {
+    "airbag": "centre deflection (mm)",
+    "airbag_bending": "centre deflection (mm)",
+    "shear_stretch": "top-edge force F1",
+}
 FIELDS = [
     "problem",
     "elements",
@@ -162,8 +177,10 @@ def solve_one(
     from wrinkle.solvers.linear import make_linear_solver
 
     start = time.perf_counter()
+    name, overrides = CASES[problem]
     case = read_case(
-        ROOT / "examples" / f"{problem}.toml", overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}}
+        ROOT / "examples" / f"{name}.toml",
+        overrides={**overrides, "mesh": {"rectangle": {"nx": n, "ny": n}}},
     )
     model = case.model
     steps = case.settings.steps
@@ -209,7 +226,7 @@ def solve_one(
     result = float("nan")
     if failed is None:
         u = results.final.displacement
-        if problem == "airbag":
+        if name == "airbag":
             centre = case.probes["centre"]
             result = 1e3 * float(u.reshape(-1, 3)[centre, 2].mean())
         else:
