@@ -24,7 +24,7 @@ from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
 from wrinkle.output import ResultWriter
-from wrinkle.refinement import refined
+from wrinkle.refinement import MAX_REFINED_ELEMENTS, refine
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import evaluate_expression, select_nodes
 from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS, ConvergenceError, SolverSettings
@@ -75,6 +75,7 @@ SOLVER_KEYS = {
     "growth",
     "target_iterations",
     "linear_solver",
+    "nested",
 }
 
 
@@ -180,7 +181,8 @@ class Case:
     {name: node indices} whose mean displacement the history records; units: labels such as
     {"length": "m", "force": "N"} for the summary and the pictures; source: the case file;
     title: its ``title``; verification: its [verification] table (read by the verification
-    gallery only).
+    gallery only); coarse: with ``[solver] nested``, the same case on the coarser meshes of
+    ``[mesh] refine``, coarsest first (``wrinkle.sequencing``).
     """
 
     model: Model
@@ -190,6 +192,7 @@ class Case:
     source: Path | None = None
     title: str = ""
     verification: dict[str, Any] = field(default_factory=dict)
+    coarse: list[Model] = field(default_factory=list)
 
     def _label(self, results: Results | None) -> None:
         if results is not None:
@@ -200,7 +203,9 @@ class Case:
         ``SolverSettings`` overriding them); the results carry the case's probes and units.
         Raises ConvergenceError (its ``results`` labelled the same) if a step fails."""
         try:
-            results = self.model.solve(self.settings, on_step=on_step, **options)
+            results = self.model.solve(
+                self.settings, on_step=on_step, coarse=self.coarse or None, **options
+            )
         except ConvergenceError as error:
             self._label(error.results)
             raise
@@ -257,7 +262,45 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
         {"support", "load", "probe", "solver", "title", "verification"},
     )
 
-    mesh, units = _read_mesh(reader, data["mesh"], path.parent)
+    base, times, units = _read_mesh(reader, data["mesh"], path.parent)
+    if base.n_elements * 4**times > MAX_REFINED_ELEMENTS:
+        reader.fail(
+            "[mesh]",
+            f"'refine' = {times} would make {base.n_elements * 4**times:,} elements "
+            f"(at most {MAX_REFINED_ELEMENTS:,})",
+        )
+    meshes = [base]
+    for _ in range(times):
+        meshes.append(refine(meshes[-1]).mesh)
+    mesh = meshes[-1]
+    model = _read_model(reader, data, mesh)
+    probes = {}
+    for index, table in enumerate(data.get("probe", [])):
+        where = f"[[probe]] {index + 1}"
+        reader.keys(table, where, {"nodes"}, {"name"})
+        name = reader.string(table, "name", where) if "name" in table else table["nodes"]
+        probes[str(name)] = reader.nodes(mesh, table, where)
+    settings = _read_solver(reader, data.get("solver", {}))
+    coarse = []
+    if settings.nested:
+        if times == 0:
+            reader.fail("[solver]", "'nested' needs coarser meshes: set [mesh] refine >= 1")
+        for level, level_mesh in enumerate(meshes[:-1]):
+            try:
+                coarse.append(_read_model(reader, data, level_mesh))
+            except CaseError as error:
+                raise CaseError(f"{error} (on the mesh of [mesh] refine = {level})") from None
+    title = data.get("title", "")
+    if not isinstance(title, str):
+        reader.fail("top level", f"'title' must be a string, got {title!r}")
+    verification = data.get("verification", {})
+    if not isinstance(verification, dict):
+        reader.fail("[verification]", "must be a table")
+    return Case(model, settings, probes, units, path, title, verification, coarse)
+
+
+def _read_model(reader: _Reader, data: dict, mesh: Mesh) -> Model:
+    """The model of the case's materials, supports and loads on ``mesh``."""
     model = Model(mesh)
     materials = data["material"] if isinstance(data["material"], list) else [data["material"]]
     for index, table in enumerate(materials):
@@ -274,27 +317,15 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
         _read_support(reader, model, table, f"[[support]] {index + 1}")
     for index, table in enumerate(data.get("load", [])):
         _read_load(reader, model, table, f"[[load]] {index + 1}")
-    probes = {}
-    for index, table in enumerate(data.get("probe", [])):
-        where = f"[[probe]] {index + 1}"
-        reader.keys(table, where, {"nodes"}, {"name"})
-        name = reader.string(table, "name", where) if "name" in table else table["nodes"]
-        probes[str(name)] = reader.nodes(mesh, table, where)
-    settings = _read_solver(reader, data.get("solver", {}))
     try:
         model.check_supports()
     except ValueError as error:
         reader.fail("[[support]]", str(error))
-    title = data.get("title", "")
-    if not isinstance(title, str):
-        reader.fail("top level", f"'title' must be a string, got {title!r}")
-    verification = data.get("verification", {})
-    if not isinstance(verification, dict):
-        reader.fail("[verification]", "must be a table")
-    return Case(model, settings, probes, units, path, title, verification)
+    return model
 
 
-def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:
+def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, int, dict]:
+    """The mesh before refinement, how many times [mesh] refine splits it, and the units."""
     where = "[mesh]"
     if not isinstance(table, dict):
         reader.fail(where, "must be a table")
@@ -320,7 +351,7 @@ def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:
     try:
         if source == "file":
             file = folder / reader.string(table, "file", where)
-            return refined(read_mesh(file), times), units
+            return read_mesh(file), times, units
         generator, keys = GENERATORS[source]
         parameters = table[source]
         sub = f"[mesh] {source}"
@@ -338,7 +369,7 @@ def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, dict]:
             reader.number(parameters, key, sub, positive=True, integer=key.startswith("n"))
             for key in keys
         ]
-        return refined(generator(*values), times), units
+        return generator(*values), times, units
     except CaseError:
         raise
     except (ValueError, ImportError, OSError) as error:
@@ -512,6 +543,10 @@ def _read_solver(reader: _Reader, table: dict) -> SolverSettings:
     for key in ("tolerance", "min_step", "max_step", "cutback", "growth"):
         if key in table:
             solver[key] = float(reader.number(table, key, where, positive=True))
+    if "nested" in table:
+        if not isinstance(table["nested"], bool):
+            reader.fail(where, f"'nested' must be true or false, got {table['nested']!r}")
+        solver["nested"] = table["nested"]
     try:
         return SolverSettings(**solver)
     except ValueError as error:

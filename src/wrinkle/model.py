@@ -37,6 +37,7 @@ from wrinkle.mesh import Mesh
 from wrinkle.post import support_reactions
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import select_nodes
+from wrinkle.sequencing import NestedStart
 from wrinkle.solvers.base import ConvergenceError, SolverResult
 from wrinkle.solvers.settings import SolverSettings
 from wrinkle.solvers.stepping import follow_load_path
@@ -439,6 +440,11 @@ class Model:
         raise ValueError(f"rigid-body motion is unrestrained: the supports do not prevent {motion}")
 
     # -- discretisation and solution ----------------------------------------------------
+    def release(self) -> None:
+        """Forget the discrete system, its pattern and geometry (made again by
+        ``discretise``), to free their memory."""
+        self._system = self._pattern = self._geometry = self._bending = None
+
     def discretise(self) -> DiscreteSystem:
         """The discrete system of the model as it stands (made again after a change)."""
         if self._system is None:
@@ -468,6 +474,7 @@ class Model:
         *,
         u0: np.ndarray | None = None,
         on_step: Callable[[StepResult], None] | None = None,
+        coarse: Sequence[Model] | None = None,
         **options: Any,
     ) -> Results:
         """Proportional stepping of loads and prescribed displacements from 0 to 1.
@@ -479,30 +486,45 @@ class Model:
         increment grows again after easy steps; each step starts from the extrapolation of the
         last two converged states (u0 being the state at load factor 0) or, if it moves
         supports, from the tangent prediction, where that is closer to balance.
-        ``on_step(step_result)`` is called after each converged step. Raises
+        ``on_step(step_result)`` is called after each converged step. coarse: models of
+        coarser meshes, coarsest first, each refined once being the next (the last: this
+        model's mesh), from which the first step starts (``wrinkle.sequencing``): used, and
+        needed, by ``nested=True``, from the reference state only (u0 None). Raises
         ConvergenceError, with the converged steps in its ``results`` attribute, if a step
         cannot be solved; ValueError for a bad setting or unrestrained rigid-body motion.
         """
         settings = (settings or SolverSettings()).replace(**options)
+        if settings.nested and not coarse:
+            raise ValueError(
+                "nested needs the models of the coarser meshes (coarse=...); a case file makes "
+                "them from [mesh] refine"
+            )
         self.check_supports()
         system = self.discretise()
         results = Results(self)
+        first_guess = None
+        if coarse and settings.nested and u0 is None:
+            first_guess = NestedStart(coarse, self, settings, results.stopwatch)
 
         def record(load_factor: float, u: np.ndarray, solved: SolverResult) -> None:
             step = results.append(load_factor, u, solved)
             if on_step is not None:
                 on_step(step)
 
+        solver = settings.solver()
         try:
             follow_load_path(
                 system,
-                settings.solver(),
+                solver,
                 settings.controller(),
                 u0=u0,
                 on_step=record,
                 timer=results.stopwatch,
+                first_guess=first_guess,
             )
         except ConvergenceError as error:
             error.results = results
             raise
+        finally:
+            solver.release()
         return results

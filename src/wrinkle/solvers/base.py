@@ -87,6 +87,10 @@ class LinearSolver(Protocol):
         self, A: sp.csr_matrix, symmetric: bool
     ) -> Callable[[np.ndarray], np.ndarray] | None: ...
 
+    def release(self) -> None:
+        """Free the memory of its factorisations (PARDISO's is outside Python's reach)."""
+        ...
+
 
 class Problem(Protocol):
     """A discretised nonlinear problem with fixed constraints."""
@@ -242,6 +246,11 @@ class RegularisedSolver(ABC):
                 return factorised(b)
 
         return timed_solve
+
+    def release(self) -> None:
+        """Free the linear back-end's factorisations; the solver stays usable."""
+        if self.linear is not None:
+            self.linear.release()
 
     def _time_with(self, problem: Problem) -> None:
         """Charge the factorisations and solves to the problem's stopwatch (if it has one)."""

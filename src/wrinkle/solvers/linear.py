@@ -67,6 +67,9 @@ class SuperLU:
 
     name = "superlu"
 
+    def release(self) -> None:
+        """Nothing to do: the factors are freed with the objects that hold them."""
+
     def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
         """LU of A (real or complex); None if it is exactly singular."""
         try:
@@ -107,6 +110,10 @@ class _PatternCache:
             return True
         self._indptr, self._indices = A.indptr.copy(), A.indices.copy()
         return False
+
+    def known(self) -> bool:
+        """Whether a pattern has been seen (and analysed)."""
+        return self._indptr is not None
 
 
 class SymmetryCheck:
@@ -194,6 +201,14 @@ class Pardiso:
         self._upper_pattern = _PatternCache()
         self._fallback = SuperLU()
 
+    def release(self) -> None:
+        """Free MKL's memory of both matrix types (pypardiso's solvers do not when they are
+        dropped); the next factorisation starts with a new ordering."""
+        for mtype, solver in self._solvers.items():
+            if self._analysed[mtype].known():
+                solver.free_memory(everything=True)
+            self._analysed[mtype] = _PatternCache()
+
     def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
         if np.iscomplexobj(A.data):
             return self._fallback.factorise(A, symmetric)
@@ -232,6 +247,9 @@ class Cholmod:
 
     name = "cholmod"
 
+    def release(self) -> None:
+        """Nothing to do: the factors are freed with the objects that hold them."""
+
     def __init__(self):
         from sksparse import cholmod
 
@@ -257,6 +275,10 @@ class AlgebraicMultigrid:
     """Conjugate gradients with a smoothed-aggregation AMG preconditioner (pyamg)."""
 
     name = "amg"
+
+    def release(self) -> None:
+        """Nothing to do: the factors are freed with the objects that hold them."""
+
     relative_tolerance = 1e-10
     max_iterations = 2000
 

@@ -64,7 +64,9 @@ class SolverSettings:
     "superlu", "pardiso", "cholmod" or "amg". Load stepping (``StepController``): steps
     (the first increment of the load factor is 1/steps), min_step, max_step (None: 1/steps),
     cutback (factor on the increment after a failed step), growth (factor after an easy
-    step), target_iterations (a step converged in at most this many iterations is easy).
+    step), target_iterations (a step converged in at most this many iterations is easy);
+    nested: start the first load step from the solution of coarser meshes (``Model.solve``'s
+    ``coarse``; a case file makes them from ``[mesh] refine``).
     Raises ValueError naming the first bad field.
     """
 
@@ -78,6 +80,7 @@ class SolverSettings:
     cutback: float = 0.5
     growth: float = 2.0
     target_iterations: int = 6
+    nested: bool = False
 
     def __post_init__(self) -> None:
         linear_solvers = ["auto", *LINEAR_SOLVERS]
@@ -119,6 +122,7 @@ class SolverSettings:
                 lambda: _is_integer(self.target_iterations, 0),
                 "an integer >= 0",
             ),
+            ("nested", lambda: isinstance(self.nested, bool), "true or false"),
         ]
         for name, holds, requirement in rules:
             if not holds():

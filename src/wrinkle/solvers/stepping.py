@@ -139,6 +139,7 @@ def solve_step(
     u: np.ndarray,
     solver: RegularisedSolver,
     predicted: np.ndarray | None = None,
+    trusted: bool = False,
 ) -> SolverResult:
     """Solve one load level from the displacements u (n_dofs,).
 
@@ -147,7 +148,8 @@ def solve_step(
     is the tangent prediction (``tangent_prediction``; solvers with ``tangent_predictor``
     only). The solve starts from the guess, with the new prescribed values, instead of from
     u if the guess is in balance already (one evaluation of the forces) or its out-of-balance
-    force is smaller (two). Raises ConvergenceError if the solver fails.
+    force is smaller (two), or, if ``trusted`` (a solution of a coarser mesh), always. Raises
+    ConvergenceError if the solver fails.
     """
     constrained = ~problem.free
     start = np.where(constrained, problem.prescribed, u)
@@ -159,6 +161,9 @@ def solve_step(
     if predicted is not None:
         guess = np.where(constrained, problem.prescribed, predicted)
         at_guess = try_evaluate(problem, guess, stiffness=False)
+        if at_guess is not None and trusted:
+            logger.info("load factor %.6g starts from the coarser mesh", problem.load_factor)
+            return solver.solve(problem, guess, at_guess)
         if at_guess is not None:
             if not is_converged(at_guess, solver.tolerance):
                 at_start = try_evaluate(problem, start, stiffness=False)
@@ -169,6 +174,7 @@ def solve_step(
 
 
 OnStep = Callable[[float, np.ndarray, SolverResult], None]
+FirstGuess = Callable[[float], np.ndarray | None]
 
 
 def follow_load_path(
@@ -178,13 +184,17 @@ def follow_load_path(
     u0: np.ndarray | None = None,
     on_step: OnStep | None = None,
     timer: Stopwatch | None = None,
+    first_guess: FirstGuess | None = None,
 ) -> np.ndarray:
     """Load control from load factor 0 to 1: increments from ``controller``, each step
     solved by ``solve_step`` from the extrapolation of the last two converged states (u0, or
     zero, being the state at load factor 0) or, for the first, the tangent prediction.
 
     on_step(load_factor, u, solved) is called after each converged step (u (n_dofs,), solved
-    the ``SolverResult``); timer: a stopwatch the problems share (the time of their parts).
+    the ``SolverResult``); timer: a stopwatch the problems share (the time of their parts);
+    first_guess(load_factor): a start for the first step, (n_dofs,), or None, such as the
+    solution of coarser meshes interpolated (``wrinkle.sequencing``), used without the
+    comparison of ``solve_step``.
     Returns the displacements at load factor 1. Raises ConvergenceError, with ``reached``
     (the last converged load factor) set, when a step fails at the smallest increment.
     """
@@ -198,8 +208,12 @@ def follow_load_path(
         if timer is not None:
             problem.timer = timer
         predicted = extrapolate(previous, factor, u, trial_factor)
+        trusted = False
+        if previous is None and first_guess is not None:
+            predicted = first_guess(trial_factor)
+            trusted = predicted is not None
         try:
-            solved = solve_step(problem, u, solver, predicted=predicted)
+            solved = solve_step(problem, u, solver, predicted=predicted, trusted=trusted)
         except ConvergenceError as error:
             smaller = controller.after_failure(increment)
             if smaller is None:
