@@ -4,7 +4,10 @@ meshes of about 10^3 .. 10^6 elements.
 Each mesh is solved in its own Python process (so that the peak resident set is that
 solve's): the quarter airbag of examples/airbag.toml inflated from the flat sheet at full
 pressure, the same airbag with the sheet's own bending stiffness on the mean surface
-(``airbag_bending``: ``[material] bending = true``, wrinkle.bending), and the unit square of
+(``airbag_bending``: ``[material] bending = true``, wrinkle.bending), that airbag solved first
+on coarser meshes (``airbag_nested``: ``[mesh] refine`` from about 32 squares a side and
+``[solver] nested``, wrinkle.sequencing; the iterations are the finest mesh's, the times all
+levels'), and the unit square of
 examples/shear_stretch.toml (f = 5) under its boundary displacements. For each: elements,
 unknowns, load steps, Newton iterations, wall time split into element evaluation, assembly,
 linear solves and the rest (``Results.timings``), the peak resident set, and the result
@@ -30,6 +33,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import re
 import resource
 import subprocess
@@ -44,19 +48,37 @@ ROOT = Path(__file__).resolve().parents[1]
 SIZES = {  # squares per side: 2 n^2 triangles
     "airbag": [23, 71, 224, 708],
     "airbag_bending": [23, 71, 224, 708],
+    "airbag_nested": [64, 128, 224, 704],  # finest mesh; divisible by 2^levels (below)
     "shear_stretch": [23, 71, 224, 708],
 }
 # problem: (case file in examples/, overrides beyond the mesh)
 CASES = {
     "airbag": ("airbag", {}),
     "airbag_bending": ("airbag", {"material": {"bending": True}}),  # the sheet's own D
+    # the same, solved first on coarser meshes ([solver] nested, wrinkle.sequencing)
+    "airbag_nested": ("airbag", {"material": {"bending": True}, "solver": {"nested": True}}),
     "shear_stretch": ("shear_stretch", {}),
 }
 RESULT_NAMES = {
     "airbag": "centre deflection (mm)",
     "airbag_bending": "centre deflection (mm)",
+    "airbag_nested": "centre deflection (mm)",
     "shear_stretch": "top-edge force F1",
 }
+
+
+def mesh_overrides(problem: str, n: int) -> dict:
+    """The [mesh] overrides of an n x n mesh: for airbag_nested, a mesh of about 32 squares a
+    side refined k times to n (n divisible by 2^k)."""
+    if problem != "airbag_nested":
+        return {"rectangle": {"nx": n, "ny": n}}
+    levels = max(1, int(math.log2(n / 32)))
+    if n % 2**levels:
+        raise SystemExit(f"airbag_nested: {n} squares a side is not divisible by 2^{levels}")
+    base = n // 2**levels
+    return {"rectangle": {"nx": base, "ny": base}, "refine": levels}
+
+
 FIELDS = [
     "problem",
     "elements",
@@ -173,6 +195,7 @@ def solve_one(
 
     from wrinkle.case import read_case
     from wrinkle.results import Results
+    from wrinkle.sequencing import NestedStart
     from wrinkle.solvers import ConvergenceError, follow_load_path
     from wrinkle.solvers.linear import make_linear_solver
 
@@ -180,7 +203,7 @@ def solve_one(
     name, overrides = CASES[problem]
     case = read_case(
         ROOT / "examples" / f"{name}.toml",
-        overrides={**overrides, "mesh": {"rectangle": {"nx": n, "ny": n}}},
+        overrides={**overrides, "mesh": mesh_overrides(problem, n)},
     )
     model = case.model
     steps = case.settings.steps
@@ -206,12 +229,16 @@ def solve_one(
         log.setLevel(logging.INFO)
     failed = None
     try:
+        first_guess = None
+        if case.coarse:  # the coarse levels' time counts: the stopwatch is the solve's
+            first_guess = NestedStart(case.coarse, model, settings, results.stopwatch)
         follow_load_path(
             model.discretise(),
             settings.solver(),
             settings.controller(),
             on_step=results.append,
             timer=results.stopwatch,
+            first_guess=first_guess,
         )
     except ConvergenceError as error:
         failed = error
