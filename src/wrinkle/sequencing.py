@@ -101,7 +101,7 @@ class NestedStart:
             finally:
                 solver.release()  # the finer levels need the memory
                 model.release()
-            u = solved.u.copy()
+            u = solved.u
             logger.info(
                 "nested: level %d (%d elements) converged in %d iterations",
                 level,

@@ -56,7 +56,14 @@ Solve = Callable[[np.ndarray], np.ndarray]
 AUTO_PARDISO_DOFS = 20_000  # from benchmarks/linear_solvers.py: PARDISO wins above this size
 
 
-class SuperLU:
+class _FreedWithTheObject:
+    """A back-end whose factors are Python objects, freed when they are dropped."""
+
+    def release(self) -> None:
+        """Nothing to do (``Pardiso.release`` has work to do)."""
+
+
+class SuperLU(_FreedWithTheObject):
     """SciPy's SuperLU with a symmetric-mode ordering (the pattern is structurally symmetric)
     and diagonal pivots only (``diag_pivot_thresh = 0``): the regularised matrices need no
     row exchanges, and with threshold pivoting a membrane that is stress-free out of its plane
@@ -66,9 +73,6 @@ class SuperLU:
     and the nonlinear solver raises the regularisation."""
 
     name = "superlu"
-
-    def release(self) -> None:
-        """Nothing to do: the factors are freed with the objects that hold them."""
 
     def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
         """LU of A (real or complex); None if it is exactly singular."""
@@ -242,13 +246,10 @@ class Pardiso:
         return solve
 
 
-class Cholmod:
+class Cholmod(_FreedWithTheObject):
     """CHOLMOD Cholesky of a symmetric positive definite matrix; symbolic analysis reused."""
 
     name = "cholmod"
-
-    def release(self) -> None:
-        """Nothing to do: the factors are freed with the objects that hold them."""
 
     def __init__(self):
         from sksparse import cholmod
@@ -271,13 +272,10 @@ class Cholmod:
         return self._factor.solve_A
 
 
-class AlgebraicMultigrid:
+class AlgebraicMultigrid(_FreedWithTheObject):
     """Conjugate gradients with a smoothed-aggregation AMG preconditioner (pyamg)."""
 
     name = "amg"
-
-    def release(self) -> None:
-        """Nothing to do: the factors are freed with the objects that hold them."""
 
     relative_tolerance = 1e-10
     max_iterations = 2000
