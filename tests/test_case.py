@@ -72,6 +72,7 @@ tolerance = 1e-9
         ("cutback = -1", "[solver]: 'cutback' must be > 0"),
         ("steps = 0", "[solver]: 'steps' must be >= 1"),
         ("step = 3", "[solver]: unknown key 'step'"),
+        ("look_ahead = 1", "[solver]: 'look_ahead' must be true or false, got 1"),
     ],
 )
 def test_bad_solver_keys(tmp_path, line, fragment):

@@ -106,3 +106,29 @@ def test_set_prescribed_and_nodal_forces_replace_values():
         model.set_prescribed("y == 0.5", (0.1, 0.0, 0.0))
     with pytest.raises(ValueError, match="75 components"):
         model.set_nodal_forces(np.zeros(3))
+
+
+def test_motion_force_scale_closed_forms():
+    """DiscreteSystem.motion_force: a unit square held at x = 0 and moved d along x at x = 1
+    stretches uniformly in the harmonic extension (v = d X), so each held node of the two
+    edges carries k d times its share of the edge, h (h / 2 at the corners); a rigid
+    translation of the whole boundary carries nothing; no prescribed motion gives 0."""
+    n, d = 4, 0.01
+    mesh = wrinkle.rectangle(1.0, 1.0, n, n)
+    material = StVenantKirchhoff.isotropic(E=1.0, nu=0.3, thickness=1.0)
+    model = wrinkle.Model(mesh, material)
+    model.fix("x == 0")
+    model.prescribe("x == 1", (d, 0.0, 0.0))
+    system = model.discretise()
+    k = system.groups[0][1].material.reference_stiffness
+    h = 1.0 / n
+    expected = k * d * np.sqrt(2 * ((n - 1) * h**2 + 2 * (h / 2) ** 2))
+    assert system.motion_force() == pytest.approx(expected, rel=1e-9)
+    assert system.at(0.5).motion_force == pytest.approx(0.5 * expected, rel=1e-9)
+    translated = wrinkle.Model(mesh, material)
+    translated.prescribe("x == 0 or x == 1 or y == 0 or y == 1", (0.3, 0.2, 0.1))
+    assert translated.discretise().motion_force() < 1e-9 * k * 0.3
+    pressed = wrinkle.Model(mesh, material)
+    pressed.fix("y == 0")
+    pressed.add_pressure(1.0)
+    assert pressed.discretise().motion_force() == 0.0

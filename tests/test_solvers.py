@@ -44,7 +44,9 @@ def test_newton_converges_quadratically(state):
         assert taut > 0.7 * model.mesh.n_elements and slack == 0
     else:
         assert wrinkled > 0.8 * model.mesh.n_elements
-    scale = solved.evaluation.force_scale
+    # relative to the forces the sheet carries (the convergence test's scale may be the
+    # larger force scale of the prescribed motion, which would shift the ratios below)
+    scale = np.linalg.norm(solved.evaluation.reactions)
     r = np.array(solved.residual_norms) / scale
     # pairs close to the solution, the second still above the round-off of the wrinkling
     # solve (relative 1e-13 in the stresses)

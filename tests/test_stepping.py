@@ -67,7 +67,9 @@ def test_cut_back_and_growth_sequence():
     (easy) each: 0.25 fails, 0.125 converges, grows back to 0.25 which fails from 0.125,
     0.125 again, and so on: the path reaches 1 in eight steps of 0.125."""
     solver = FakeSolver(largest=0.2, iterations=3)
-    controller = SolverSettings(steps=4, cutback=0.5, growth=2.0, target_iterations=6)
+    controller = SolverSettings(
+        steps=4, cutback=0.5, growth=2.0, target_iterations=6, look_ahead=False
+    )
     converged = []
     follow_load_path(
         FakeLevels(),
@@ -83,13 +85,72 @@ def test_hard_steps_do_not_grow():
     """A step taking more than target_iterations keeps its increment: after the first cut
     (0.5 -> 0.25 under a limit of 0.3) every later step stays at 0.25."""
     solver = FakeSolver(largest=0.3, iterations=9)
-    follow_load_path(FakeLevels(), solver, SolverSettings(steps=2).controller())
+    follow_load_path(FakeLevels(), solver, SolverSettings(steps=2, look_ahead=False).controller())
     assert solver.trials == [0.5, 0.25, 0.5, 0.75, 1.0]
+
+
+def test_look_ahead_tries_the_end_before_cutting_back():
+    """With the look-ahead (the default), the first failure above is followed by a try of the
+    end of the path (1.0, which fails too, being an increment of 1 > 0.3), then the same
+    cut-backs as without it."""
+    solver = FakeSolver(largest=0.3, iterations=9)
+    follow_load_path(FakeLevels(), solver, SolverSettings(steps=2).controller())
+    assert solver.trials == [0.5, 1.0, 0.25, 0.5, 0.75, 1.0]
+
+
+class HarderNearZero:
+    """A flat sheet under pressure: a step from the reference state (zero displacements) to a
+    load factor below ``easiest`` fails; every other step converges, at the displacements
+    u = load factor (so that each reported state can be matched to its level)."""
+
+    tolerance = 1e-6
+    tangent_predictor = False
+
+    def __init__(self, easiest, below_fails_always=False):
+        self.easiest, self.always = easiest, below_fails_always
+        self.trials = []
+
+    def solve(self, problem, start, at_start=None):
+        factor = round(problem.load_factor, 12)
+        self.trials.append(factor)
+        from_rest = not np.any(start)
+        if factor < self.easiest and (from_rest or self.always):
+            raise ConvergenceError("small load from the flat sheet", [])
+        return SolverResult(np.full(start.size, factor), 4, [], at_start)
+
+
+def test_a_failed_first_step_is_reached_downwards_from_the_end():
+    """Worked by hand, steps = 4, steps from rest below 0.6 fail: 0.25 fails, 1.0 converges,
+    then 0.75, 0.5 and 0.25 downwards, each from the level above; the path is reported in
+    increasing load factor, each level with its own displacements."""
+    solver = HarderNearZero(easiest=0.6)
+    reported = []
+    u = follow_load_path(
+        FakeLevels(),
+        solver,
+        SolverSettings(steps=4).controller(),
+        on_step=lambda f, u, s: reported.append((round(f, 12), u[0])),
+    )
+    assert solver.trials == [0.25, 1.0, 0.75, 0.5, 0.25]
+    assert reported == [(0.25, 0.25), (0.5, 0.5), (0.75, 0.75), (1.0, 1.0)]
+    assert u[0] == 1.0
+
+
+def test_a_failed_descent_falls_back_to_cutting_back():
+    """Steps below 0.3 fail from any start, and min_step = 0.2: downwards 0.25 fails and its
+    cut-back would be below min_step, so the first step is cut back as without the look-ahead,
+    which is below min_step as well: the path fails having reached nothing."""
+    solver = HarderNearZero(easiest=0.3, below_fails_always=True)
+    settings = SolverSettings(steps=4, min_step=0.2)
+    with pytest.raises(ConvergenceError, match="minimum 0.2") as caught:
+        follow_load_path(FakeLevels(), solver, settings.controller())
+    assert caught.value.reached == 0.0
+    assert solver.trials == [0.25, 1.0, 0.75, 0.5, 0.25]
 
 
 def test_failure_below_min_step_reports_where_it_stopped():
     solver = FakeSolver(largest=0.05, iterations=1)
-    settings = SolverSettings(steps=1, min_step=0.1)
+    settings = SolverSettings(steps=1, min_step=0.1)  # the first step is the end: no look-ahead
     with pytest.raises(ConvergenceError, match="minimum 0.1") as caught:
         follow_load_path(FakeLevels(), solver, settings.controller())
     assert caught.value.reached == 0.0
@@ -110,6 +171,8 @@ def test_failure_below_min_step_reports_where_it_stopped():
         ("method", "lbfgs"),
         ("linear_solver", "mumps"),
         ("max_iterations", 0),
+        ("look_ahead", 1),
+        ("nested", "yes"),
     ],
 )
 def test_bad_settings_name_the_field(field, value):

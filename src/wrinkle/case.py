@@ -75,6 +75,7 @@ SOLVER_KEYS = {
     "growth",
     "target_iterations",
     "linear_solver",
+    "look_ahead",
     "nested",
 }
 
@@ -543,10 +544,11 @@ def _read_solver(reader: _Reader, table: dict) -> SolverSettings:
     for key in ("tolerance", "min_step", "max_step", "cutback", "growth"):
         if key in table:
             solver[key] = float(reader.number(table, key, where, positive=True))
-    if "nested" in table:
-        if not isinstance(table["nested"], bool):
-            reader.fail(where, f"'nested' must be true or false, got {table['nested']!r}")
-        solver["nested"] = table["nested"]
+    for key in ("look_ahead", "nested"):
+        if key in table:
+            if not isinstance(table[key], bool):
+                reader.fail(where, f"'{key}' must be true or false, got {table[key]!r}")
+            solver[key] = table[key]
     try:
         return SolverSettings(**solver)
     except ValueError as error:

@@ -58,6 +58,12 @@ class Results:
         in total (``wrinkle.timing``)."""
         return self.stopwatch.summary()
 
+    @property
+    def factorisations(self) -> int:
+        """Tangent factorisations so far, those of failed load steps and of coarser meshes
+        (``nested``) included."""
+        return self.stopwatch.factorisations
+
     def append(self, load_factor: float, u: np.ndarray, solved: SolverResult) -> StepResult:
         """Add the converged step u (n_dofs,); its reactions come from the solver's last
         evaluation, at u, where it has them."""

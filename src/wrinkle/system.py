@@ -17,6 +17,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields
 
 import numpy as np
+import scipy.sparse as sp
 
 from wrinkle import compiled
 from wrinkle.assembly import SparsityPattern
@@ -36,6 +37,7 @@ from wrinkle.loads import (
 )
 from wrinkle.mesh import Mesh
 from wrinkle.solvers.base import Evaluation, EvaluationFailure
+from wrinkle.solvers.linear import make_linear_solver
 from wrinkle.timing import ASSEMBLY, ELEMENTS, Stopwatch
 from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, Wrinkling, WrinklingError
 
@@ -154,6 +156,7 @@ class DiscreteSystem:
             self._bending_positions = pattern.pair_positions(rows, columns).ravel()
             self._bending_values = np.repeat(values, 3)
         self._constraint_data: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._motion_force_at_full: float | None = None
 
     @property
     def elements(self) -> MembraneElements:
@@ -184,6 +187,67 @@ class DiscreteSystem:
             per_element = g.area * np.linalg.norm(g.shape_gradient.reshape(-1, 6), axis=1)
             total += float(stiffness * np.linalg.norm(per_element * (1.0 + coordinate_noise))) ** 2
         return float(10 * np.finfo(float).eps * np.sqrt(total))
+
+    def motion_force(self, prescribed: np.ndarray | None = None) -> float:
+        """The force scale of a prescribed motion, force: the norm of the reactions of a
+        sheet under the isotropic tension k (each element's material reference stiffness,
+        N/m) when its constrained components take the values ``prescribed`` (n_dofs,;
+        default: those at load factor 1, computed once) and its free ones the harmonic
+        extension of them, L_ff v_f = -L_fc v_c, with L = sum_e k_e A_e grad psi_a . grad psi_b
+        for each displacement component (a Laplacian). It is the order of the forces the motion
+        needs in the taut sheet, linear in the motion and zero for a rigid translation; the
+        convergence test uses it so that a sheet moved into slack, carrying no force, can
+        converge. Zero without prescribed motion."""
+        if prescribed is None:
+            if self._motion_force_at_full is None:
+                self._motion_force_at_full = self.motion_force(self.prescribed)
+            return self._motion_force_at_full
+        values = np.where(self.constrained, prescribed, 0.0).reshape(-1, 3)
+        if not np.any(values):
+            return 0.0
+        laplacian = self._stiffness_laplacian()
+        constrained = self.constrained.reshape(-1, 3)
+        moved = [c for c in range(3) if np.any(values[constrained[:, c], c])]
+        squares = 0.0
+        while moved:  # the components held at the same nodes share one factorisation
+            held = constrained[:, moved[0]]
+            same = [c for c in moved if np.array_equal(constrained[:, c], held)]
+            moved = [c for c in moved if c not in same]
+            v_held = values[held][:, same]  # (n_held, len(same))
+            L_free = laplacian[~held]
+            v_free = np.zeros((int(np.count_nonzero(~held)), len(same)))
+            if v_free.size:
+                L_ff = L_free[:, ~held]
+                # a free region that touches no held node (an island) has a singular block:
+                # a shift of 10^-12 of the diagonal gives it the extension zero
+                shift = 1e-12 * float(np.abs(L_ff.diagonal()).max())
+                L_ff = (L_ff + sp.identity(L_ff.shape[0], format="csr") * shift).tocsr()
+                linear = make_linear_solver("auto", L_ff.shape[0])
+                solve = linear.factorise(L_ff, True)
+                if solve is None:
+                    raise EvaluationFailure("the prescribed motion's force scale: singular L")
+                right = -(L_free[:, held] @ v_held)
+                for column in range(len(same)):
+                    v_free[:, column] = solve(right[:, column])
+                linear.release()
+            L_held = laplacian[held]
+            reactions = L_held[:, ~held] @ v_free + L_held[:, held] @ v_held
+            squares += float(np.sum(reactions**2))
+        return float(np.sqrt(squares))
+
+    def _stiffness_laplacian(self) -> sp.csr_matrix:
+        """L of ``motion_force``: (n_nodes, n_nodes), N/m."""
+        triangles = self.mesh.triangles
+        g = self.geometry
+        weight = np.zeros(self.mesh.n_elements)
+        for indices, elements in self.groups:
+            weight[indices] = elements.material.reference_stiffness
+        G = g.shape_gradient  # (n_elements, 3, 2)
+        blocks = (weight * g.area)[:, None, None] * np.einsum("eak,ebk->eab", G, G)
+        rows = np.repeat(triangles, 3, axis=1).ravel()
+        columns = np.tile(triangles, (1, 3)).ravel()
+        n = self.mesh.n_nodes
+        return sp.csr_matrix((blocks.ravel(), (rows, columns)), shape=(n, n))
 
     def step_metric(self) -> np.ndarray:
         """CSR data, on ``pattern``, of the unit-tension stiffness (``unit_tension_stiffness``
@@ -387,7 +451,9 @@ class DiscreteSystem:
         values of the constrained components (default load_factor times those at full
         load)."""
         if prescribed is None:
-            prescribed = load_factor * self.prescribed
+            problem = StepProblem(self, load_factor, load_factor * self.prescribed)
+            problem.motion_force = abs(load_factor) * self.motion_force()
+            return problem
         return StepProblem(self, load_factor, np.asarray(prescribed, dtype=float))
 
     def evaluate(
@@ -421,6 +487,9 @@ class StepProblem:
             system.constraint_data()
         )
         self.timer = Stopwatch()  # a path follower shares one across the steps
+        # the force scale of the prescribed motion (DiscreteSystem.motion_force), made at the
+        # first evaluation unless given
+        self.motion_force: float | None = None
 
     def evaluate(
         self, u: np.ndarray, stiffness: bool = True, lift: np.ndarray | None = None
@@ -477,7 +546,11 @@ class StepProblem:
                 energy = np.nan  # follower edge loads have no potential
         residual = np.where(self.free, external - internal, 0.0)
         reactions = np.where(self.free, 0.0, internal - external)
-        scale = max(np.linalg.norm(external), np.linalg.norm(reactions))
+        if self.motion_force is None:
+            self.motion_force = system.motion_force(self.prescribed)
+        scale = max(
+            float(np.linalg.norm(external)), float(np.linalg.norm(reactions)), self.motion_force
+        )
         state = result.response.state
         counts = (
             int(np.count_nonzero(state == TAUT)),

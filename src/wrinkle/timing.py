@@ -17,11 +17,13 @@ class Stopwatch:
     """Accumulates seconds per named part: ``with watch.part(ELEMENTS): ...``.
 
     Parts may nest (assembly of each block inside element evaluation): the time of an inner
-    part counts for it alone, not for the part around it.
+    part counts for it alone, not for the part around it. ``factorisations`` counts the
+    tangent factorisations made (the linear solvers add to it), failed load steps included.
     """
 
     def __init__(self):
         self.seconds: dict[str, float] = defaultdict(float)
+        self.factorisations = 0
         self._start = time.perf_counter()
         self._inner: list[float] = []  # seconds of inner parts, one entry per open part
 

@@ -39,7 +39,8 @@ class Evaluation:
     residual: (n_dofs,) out-of-balance force f - f* (external minus internal), zero at
         constrained dofs; force units.
     energy: potential energy (nan where the loads have no potential).
-    force_scale: size of the applied and reaction forces, max(|f_ext|, |reactions|), for the
+    force_scale: size of the applied and reaction forces and of the prescribed motion,
+        max(|f_ext|, |reactions|, F_motion) (``DiscreteSystem.motion_force``), for the
         convergence criterion.
     states: (taut, wrinkled, slack) element counts.
     stiffness: tangent stiffness dF*/du with constrained rows and columns replaced by the
@@ -237,6 +238,7 @@ class RegularisedSolver(ABC):
             if not symmetric and not np.iscomplexobj(A.data):
                 symmetric = self._is_symmetric(A)
             solve = linear.factorise(A, symmetric)
+        timer.factorisations += 1
         if solve is None:
             return None
         factorised = solve

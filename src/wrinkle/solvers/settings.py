@@ -59,14 +59,17 @@ class SolverSettings:
     """How a model is solved: the nonlinear method and the load stepping.
 
     method: "newton" (regularised Newton on the energy) or "restricted-step" (the paper's);
-    tolerance: on the residual force relative to the applied and reaction forces;
+    tolerance: on the residual force relative to the applied and reaction forces and the
+    prescribed motion's force scale;
     max_iterations: per load step (None: the method's, 100 or 300); linear_solver: "auto",
     "superlu", "pardiso", "cholmod" or "amg". Load stepping (``StepController``): steps
     (the first increment of the load factor is 1/steps), min_step, max_step (None: 1/steps),
     cutback (factor on the increment after a failed step), growth (factor after an easy
-    step), target_iterations (a step converged in at most this many iterations is easy);
-    nested: start the first load step from the solution of coarser meshes (``Model.solve``'s
-    ``coarse``; a case file makes them from ``[mesh] refine``).
+    step), target_iterations (a step converged in at most this many iterations is easy),
+    look_ahead (if the first step fails, solve the end of the path first and the levels below
+    it downwards, before cutting back); nested: start the first load step from the solution of
+    coarser meshes (``Model.solve``'s ``coarse``; a case file makes them from ``[mesh]
+    refine``).
     Raises ValueError naming the first bad field.
     """
 
@@ -80,6 +83,7 @@ class SolverSettings:
     cutback: float = 0.5
     growth: float = 2.0
     target_iterations: int = 6
+    look_ahead: bool = True
     nested: bool = False
 
     def __post_init__(self) -> None:
@@ -122,6 +126,7 @@ class SolverSettings:
                 lambda: _is_integer(self.target_iterations, 0),
                 "an integer >= 0",
             ),
+            ("look_ahead", lambda: isinstance(self.look_ahead, bool), "true or false"),
             ("nested", lambda: isinstance(self.nested, bool), "true or false"),
         ]
         for name, holds, requirement in rules:
@@ -153,4 +158,5 @@ class SolverSettings:
             cutback=self.cutback,
             growth=self.growth,
             target_iterations=self.target_iterations,
+            look_ahead=self.look_ahead,
         )

@@ -6,8 +6,11 @@ ones); each step starts from a prediction where it is closer to balance than the
 converged state (``solve_step``): the linear extrapolation of the last two converged states
 (``extrapolate``) or, for a step that moves supports and has no extrapolation, the tangent
 prediction (``tangent_prediction``). ``follow_load_path`` runs the loop and calls back on
-each converged step. Other path followers (arc length, volume control) and several analysis
-steps belong beside it, on the same ``LoadLevels``.
+each converged step. If the first step fails, the end of the path is tried before any
+cut-back, and the levels below it are reached downwards from there (``descend``): a small
+pressure on a flat sheet is harder than the full one, so cutting the first step back makes
+the problem harder, not easier. Other path followers (arc length, volume control) and several
+analysis steps belong beside it, on the same ``LoadLevels``.
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ __all__ = [
     "LoadLevels",
     "StepController",
     "SteppedProblem",
+    "descend",
     "extrapolate",
     "follow_load_path",
     "solve_step",
@@ -76,7 +80,9 @@ class StepController:
     first_step: the first increment; min_step: the smallest increment a cut-back may reach
     (a failure below it ends the path); max_step: the largest increment; cutback: factor on
     the increment after a failed step, in (0, 1); growth: factor on the increment after a
-    step that converged in at most target_iterations iterations (an easy step), >= 1.
+    step that converged in at most target_iterations iterations (an easy step), >= 1;
+    look_ahead: if the first step fails, try the end of the path from the same start before
+    cutting back, and reach the levels below it downwards (``follow_load_path``).
     """
 
     first_step: float = 1.0
@@ -85,6 +91,7 @@ class StepController:
     cutback: float = 0.5
     growth: float = 2.0
     target_iterations: int = 6
+    look_ahead: bool = True
 
     def first(self) -> float:
         """The first increment."""
@@ -175,6 +182,81 @@ def solve_step(
 
 OnStep = Callable[[float, np.ndarray, SolverResult], None]
 FirstGuess = Callable[[float], np.ndarray | None]
+Level = tuple[float, np.ndarray, SolverResult]  # load factor, displacements, the solve
+
+
+def _problem_at(system: LoadLevels, load_factor: float, timer: Stopwatch | None) -> SteppedProblem:
+    problem = system.at(load_factor)
+    if timer is not None:
+        problem.timer = timer
+    return problem
+
+
+def descend(
+    system: LoadLevels,
+    solver: RegularisedSolver,
+    controller: StepController,
+    top: Level,
+    timer: Stopwatch | None = None,
+) -> list[Level] | None:
+    """The levels below a converged state ``top`` (its load factor, displacements and
+    solve), reached downwards towards load factor 0 with the increments of ``controller``
+    (cut back after a failure, grown after easy steps), each step started from the
+    extrapolation of the two levels above it, as ``follow_load_path`` does upwards. The
+    levels are those an upward path would aim at: the top's load factor minus multiples of
+    the increment, down to the smallest above 0. Returns them in increasing load factor,
+    ``top`` last, or None if a step fails at the smallest increment. Valid for elastic
+    (path-independent) problems, which every material of wrinkle is."""
+    factor, u, _ = top
+    levels = [top]
+    above: tuple[float, np.ndarray] | None = None
+    increment = controller.first()
+    while factor - increment > _END:
+        trial_factor = factor - increment
+        problem = _problem_at(system, trial_factor, timer)
+        predicted = extrapolate(above, factor, u, trial_factor)
+        try:
+            solved = solve_step(problem, u, solver, predicted=predicted)
+        except ConvergenceError:
+            smaller = controller.after_failure(increment)
+            if smaller is None:
+                return None
+            increment = smaller
+            logger.info("step down to %.6g failed; increment cut to %.4g", trial_factor, increment)
+            continue
+        above = (factor, u)
+        factor, u = trial_factor, solved.u
+        logger.info(
+            "load factor %.6g converged in %d iterations (downwards)", factor, solved.iterations
+        )
+        levels.append((factor, u, solved))
+        increment = controller.after_success(increment, solved.iterations)
+    return levels[::-1]
+
+
+def _from_the_end(
+    system: LoadLevels,
+    solver: RegularisedSolver,
+    controller: StepController,
+    u: np.ndarray,
+    timer: Stopwatch | None,
+    first_guess: FirstGuess | None,
+) -> list[Level] | None:
+    """The look-ahead after a failed first step: the end of the path (load factor 1) solved
+    from the start u, then the levels below it (``descend``); None if either fails."""
+    logger.info("the first step failed: solving the end of the path first, then downwards")
+    problem = _problem_at(system, 1.0, timer)
+    predicted = None if first_guess is None else first_guess(1.0)
+    try:
+        solved = solve_step(problem, u, solver, predicted=predicted, trusted=predicted is not None)
+    except ConvergenceError:
+        logger.info("the end of the path failed as well; cutting the first step back")
+        return None
+    logger.info("load factor 1 converged in %d iterations", solved.iterations)
+    levels = descend(system, solver, controller, (1.0, solved.u, solved), timer)
+    if levels is None:
+        logger.info("a step down from the end of the path failed; cutting the first step back")
+    return levels
 
 
 def follow_load_path(
@@ -190,6 +272,10 @@ def follow_load_path(
     solved by ``solve_step`` from the extrapolation of the last two converged states (u0, or
     zero, being the state at load factor 0) or, for the first, the tangent prediction.
 
+    If the first step fails and ``controller.look_ahead``, load factor 1 is solved from the
+    start, and the levels below it downwards (``descend``); if both succeed they are the
+    path, reported in increasing load factor; otherwise the first step is cut back as any
+    failed step is.
     on_step(load_factor, u, solved) is called after each converged step (u (n_dofs,), solved
     the ``SolverResult``); timer: a stopwatch the problems share (the time of their parts);
     first_guess(load_factor): a start for the first step, (n_dofs,), or None, such as the
@@ -202,11 +288,10 @@ def follow_load_path(
     increment = controller.first()
     factor = 0.0
     previous: tuple[float, np.ndarray] | None = None  # the converged state before the last
+    looked_ahead = not controller.look_ahead
     while factor < 1.0 - _END:
         trial_factor = min(1.0, factor + increment)
-        problem = system.at(trial_factor)
-        if timer is not None:
-            problem.timer = timer
+        problem = _problem_at(system, trial_factor, timer)
         predicted = extrapolate(previous, factor, u, trial_factor)
         trusted = False
         if previous is None and first_guess is not None:
@@ -215,6 +300,16 @@ def follow_load_path(
         try:
             solved = solve_step(problem, u, solver, predicted=predicted, trusted=trusted)
         except ConvergenceError as error:
+            if previous is None and trial_factor >= 1.0 - _END:
+                looked_ahead = True  # the end of the path failed from this start already
+            elif previous is None and not looked_ahead:
+                looked_ahead = True
+                levels = _from_the_end(system, solver, controller, u, timer, first_guess)
+                if levels is not None:
+                    for level in levels:
+                        if on_step is not None:
+                            on_step(*level)
+                    return levels[-1][1]
             smaller = controller.after_failure(increment)
             if smaller is None:
                 failure = ConvergenceError(

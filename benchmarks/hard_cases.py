@@ -1,0 +1,217 @@
+"""The hard cases of the load path (issue 18), with default settings, side by side with the
+same cases without the look-ahead of a failed first step (``[solver] look_ahead = false``,
+the path follower before it), in turns in one run.
+
+The cases (case files in benchmarks/hard_cases/ and examples/):
+- the quarter airbag of examples/airbag.toml from the flat sheet, at full pressure and ramped
+  in 2, 5, 10 and 20 steps, on its structured 32 x 32 mesh (2,048 triangles) and on the gmsh
+  mesh of 2,538 triangles (airbag_gmsh.toml, made by benchmarks/gmsh_airbag.py);
+- the same airbag at 10 Pa, with and without the sheet's bending stiffness;
+- the sheared rectangle with free sides (sheared_rectangle.toml), 40 x 20 up;
+- the pulled-node fan (pulled_node.toml), and the same node pushed (the load reversed: the
+  sheet round the node goes slack);
+- a fully slack start: the shear-stretch square of examples/shear_stretch.toml solved from a
+  state shrunk 10 % about its centre (every element slack), against the flat start.
+
+For each: elements, settings, converged or not, converged load levels, Newton iterations of
+the converged levels, factorisations of the whole run (failed steps included), wall time and
+the result (airbag: centre deflection; rectangle and fan: the moved edge's or node's reaction;
+slack start: the largest nodal distance from the flat start's solution). Prints a table and
+writes it as CSV.
+
+    python benchmarks/hard_cases.py                 # every case, both settings (~5 min)
+    python benchmarks/hard_cases.py --only airbag --no-compare
+    python benchmarks/hard_cases.py --rectangle 40 80 160 --fan 8 32 64
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from table import write_csv
+
+from wrinkle.case import Case, read_case
+from wrinkle.results import Results
+from wrinkle.solvers import ConvergenceError
+
+ROOT = Path(__file__).resolve().parents[1]
+HERE = Path(__file__).resolve().parent / "hard_cases"
+AIRBAG = ROOT / "examples" / "airbag.toml"
+GMSH_AIRBAG = HERE / "airbag_gmsh.toml"
+RECTANGLE = HERE / "sheared_rectangle.toml"
+FAN = HERE / "pulled_node.toml"
+SQUARE = ROOT / "examples" / "shear_stretch.toml"
+FIELDS = [
+    "case",
+    "elements",
+    "settings",
+    "converged",
+    "levels",
+    "iterations",
+    "factorisations",
+    "time_s",
+    "result",
+]
+
+
+@dataclass
+class HardCase:
+    """One run: a case file with overrides, how to start it and what to report."""
+
+    name: str
+    path: Path
+    overrides: dict[str, Any] = field(default_factory=dict)
+    result: Callable[[Case, Results], str] = lambda case, results: ""
+    start: Callable[[Case], np.ndarray] | None = None  # u0 (n_dofs,), None: the flat sheet
+
+
+def centre_mm(case: Case, results: Results) -> str:
+    node = case.probes["centre"][0]
+    return f"centre {1e3 * results.final.displacement.reshape(-1, 3)[node, 2]:.3f} mm"
+
+
+def reaction_of(label: str) -> Callable[[Case, Results], str]:
+    def result(case: Case, results: Results) -> str:
+        reaction = case.model.support_reactions(results.final.reactions)[label]
+        return f"{label} reaction [{reaction[0]:.4g}, {reaction[1]:.4g}] N"
+
+    return result
+
+
+def shrunk(case: Case) -> np.ndarray:
+    """Every node moved 10 % towards the centre (0.5, 0.5): every element slack."""
+    X = case.model.mesh.nodes
+    u0 = np.zeros_like(X)
+    u0[:, :2] = -0.1 * (X[:, :2] - 0.5)
+    return u0.ravel()
+
+
+def distance_from_flat_start(case: Case, results: Results) -> str:
+    flat = case.model.solve(case.settings).final.displacement
+    return f"max |u - u_flat start| {np.abs(results.final.displacement - flat).max():.1e}"
+
+
+def pushed_supports(pulled: list[float]) -> list[dict[str, Any]]:
+    return [
+        {"label": "bottom", "nodes": "y == 0", "fix": ["x", "y", "z"]},
+        {"label": "pulled", "nodes": "x == 0.5 and y == 1", "displacement": pulled},
+        {"label": "plane", "nodes": "z == 0", "fix": ["z"]},
+    ]
+
+
+def cases(args: argparse.Namespace) -> list[HardCase]:
+    runs = []
+    for path, label in ((AIRBAG, "airbag 32x32"), (GMSH_AIRBAG, "airbag gmsh")):
+        for steps in args.steps:
+            runs.append(
+                HardCase(f"{label}, steps={steps}", path, {"solver": {"steps": steps}}, centre_mm)
+            )
+    for bending in (False, True):
+        runs.append(
+            HardCase(
+                f"airbag 32x32, 10 Pa{', bending' if bending else ''}",
+                AIRBAG,
+                {
+                    "load": [{"kind": "pressure", "value": 10.0}],
+                    "material": {"bending": bending},
+                },
+                centre_mm,
+            )
+        )
+    for n in args.rectangle:
+        mesh = {"mesh": {"rectangle": {"nx": n, "ny": n // 2}}}
+        runs.append(
+            HardCase(f"sheared rectangle {n}x{n // 2}", RECTANGLE, mesh, reaction_of("top"))
+        )
+    for n in args.fan:
+        mesh = {"rectangle": {"nx": n, "ny": n}}
+        runs.append(HardCase(f"pulled node {n}x{n}", FAN, {"mesh": mesh}, reaction_of("pulled")))
+        runs.append(
+            HardCase(
+                f"pushed node {n}x{n}",
+                FAN,
+                {"mesh": mesh, "support": pushed_supports([0.0, -0.1, 0.0])},
+                reaction_of("pulled"),
+            )
+        )
+    for n in args.slack:
+        runs.append(
+            HardCase(
+                f"slack start {n}x{n}",
+                SQUARE,
+                {
+                    "mesh": {"rectangle": {"nx": n, "ny": n}},
+                    "solver": {"steps": 1, "tolerance": 1e-10},
+                },
+                distance_from_flat_start,
+                shrunk,
+            )
+        )
+    if args.only:
+        runs = [run for run in runs if any(word in run.name for word in args.only)]
+    return runs
+
+
+def run(hard: HardCase, look_ahead: bool) -> dict[str, Any]:
+    overrides = {
+        key: dict(value) if isinstance(value, dict) else value
+        for key, value in hard.overrides.items()
+    }
+    overrides["solver"] = {**overrides.get("solver", {}), "look_ahead": look_ahead}
+    case = read_case(hard.path, overrides=overrides)
+    u0 = hard.start(case) if hard.start is not None else None
+    start = time.perf_counter()
+    try:
+        results = case.model.solve(case.settings, u0=u0)
+        converged, result = True, ""
+    except ConvergenceError as error:
+        results, converged = error.results, False
+        result = str(error).split(": ", 1)[-1][:70]
+    seconds = time.perf_counter() - start
+    if converged:
+        result = hard.result(case, results)
+    return {
+        "case": hard.name,
+        "elements": case.model.mesh.n_elements,
+        "settings": "default" if look_ahead else "look_ahead = false",
+        "converged": "yes" if converged else "NO",
+        "levels": len(results.steps),
+        "iterations": sum(step.iterations for step in results.steps),
+        "factorisations": results.factorisations,
+        "time_s": f"{seconds:.1f}",
+        "result": result,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, nargs="+", default=[1, 2, 5, 10, 20])
+    parser.add_argument("--rectangle", type=int, nargs="+", default=[40, 80])
+    parser.add_argument("--fan", type=int, nargs="+", default=[8, 32])
+    parser.add_argument("--slack", type=int, nargs="+", default=[8, 32])
+    parser.add_argument("--only", nargs="+", help="cases whose name contains one of these")
+    parser.add_argument("--no-compare", action="store_true", help="default settings only")
+    parser.add_argument("--csv", default="hard_cases.csv")
+    args = parser.parse_args()
+    rows = []
+    for hard in cases(args):
+        for look_ahead in (True,) if args.no_compare else (True, False):
+            row = run(hard, look_ahead)
+            rows.append(row)
+            print(" | ".join(str(row[name]) for name in FIELDS), flush=True)
+    print()
+    print("| " + " | ".join(FIELDS) + " |")
+    print("|" + " --- |" * len(FIELDS))
+    for row in rows:
+        print("| " + " | ".join(str(row[name]) for name in FIELDS) + " |")
+    write_csv(args.csv, rows, FIELDS)
+
+
+if __name__ == "__main__":
+    main()
