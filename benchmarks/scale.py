@@ -8,7 +8,10 @@ pressure, the same airbag with the sheet's own bending stiffness on the mean sur
 on coarser meshes (``airbag_nested``: ``[mesh] refine`` from about 32 squares a side and
 ``[solver] nested``, wrinkle.sequencing; the iterations are the finest mesh's, the times all
 levels'), and the unit square of
-examples/shear_stretch.toml (f = 5) under its boundary displacements. For each: elements,
+examples/shear_stretch.toml (f = 5) under its boundary displacements; the three airbags on
+unstructured gmsh meshes of about as many triangles (``airbag_gmsh``, ``airbag_gmsh_bending``,
+``airbag_gmsh_nested``: benchmarks/hard_cases/airbag_gmsh.toml, meshes made by
+benchmarks/gmsh_airbag.py, which needs the mesh extra). For each: elements,
 unknowns, load steps, Newton iterations, wall time split into element evaluation, assembly,
 linear solves and the rest (``Results.timings``), the peak resident set, and the result
 (airbag: centre deflection; square: top-edge force F1). The case's load steps are kept (no
@@ -50,6 +53,10 @@ SIZES = {  # squares per side: 2 n^2 triangles
     "airbag_bending": [23, 71, 224, 708],
     "airbag_nested": [64, 128, 224, 704],  # finest mesh; divisible by 2^levels (below)
     "shear_stretch": [23, 71, 224, 708],
+    # gmsh meshes of about 2 n^2 triangles (benchmarks/gmsh_airbag.py; needs the mesh extra)
+    "airbag_gmsh": [23, 71, 224],
+    "airbag_gmsh_bending": [23, 71, 224],
+    "airbag_gmsh_nested": [64, 128, 224],  # the finest mesh: a gmsh mesh refined (below)
 }
 # problem: (case file in examples/, overrides beyond the mesh)
 CASES = {
@@ -58,25 +65,50 @@ CASES = {
     # the same, solved first on coarser meshes ([solver] nested, wrinkle.sequencing)
     "airbag_nested": ("airbag", {"material": {"bending": True}, "solver": {"nested": True}}),
     "shear_stretch": ("shear_stretch", {}),
+    "airbag_gmsh": ("airbag_gmsh", {}),
+    "airbag_gmsh_bending": ("airbag_gmsh", {"material": {"bending": True}}),
+    "airbag_gmsh_nested": (
+        "airbag_gmsh",
+        {"material": {"bending": True}, "solver": {"nested": True}},
+    ),
+}
+CASE_FILES = {  # the case files, by name
+    "airbag": ROOT / "examples" / "airbag.toml",
+    "shear_stretch": ROOT / "examples" / "shear_stretch.toml",
+    "airbag_gmsh": ROOT / "benchmarks" / "hard_cases" / "airbag_gmsh.toml",
 }
 RESULT_NAMES = {
     "airbag": "centre deflection (mm)",
     "airbag_bending": "centre deflection (mm)",
     "airbag_nested": "centre deflection (mm)",
     "shear_stretch": "top-edge force F1",
+    "airbag_gmsh": "centre deflection (mm)",
+    "airbag_gmsh_bending": "centre deflection (mm)",
+    "airbag_gmsh_nested": "centre deflection (mm)",
 }
 
 
-def mesh_overrides(problem: str, n: int) -> dict:
-    """The [mesh] overrides of an n x n mesh: for airbag_nested, a mesh of about 32 squares a
-    side refined k times to n (n divisible by 2^k)."""
-    if problem != "airbag_nested":
-        return {"rectangle": {"nx": n, "ny": n}}
-    levels = max(1, int(math.log2(n / 32)))
-    if n % 2**levels:
-        raise SystemExit(f"airbag_nested: {n} squares a side is not divisible by 2^{levels}")
+def mesh_overrides(problem: str, n: int, scratch: Path | None = None) -> dict:
+    """The [mesh] overrides of an n x n mesh: for the nested problems, a mesh of about 32
+    squares a side refined k times to n (n divisible by 2^k); for the gmsh problems a gmsh
+    mesh of about 2 n^2 triangles (or 2 (n / 2^k)^2, refined k times), written to scratch."""
+    levels = 0
+    if problem.endswith("nested"):
+        levels = max(1, int(math.log2(n / 32)))
+        if n % 2**levels:
+            raise SystemExit(f"{problem}: {n} squares a side is not divisible by 2^{levels}")
     base = n // 2**levels
-    return {"rectangle": {"nx": base, "ny": base}, "refine": levels}
+    if problem.startswith("airbag_gmsh"):
+        from gmsh_airbag import write_airbag_mesh
+
+        if scratch is None:
+            raise ValueError(f"{problem}: the gmsh mesh needs a scratch folder")
+        path = scratch / f"airbag-{base}.msh"
+        write_airbag_mesh(2 * base * base, path)
+        mesh: dict = {"file": str(path)}
+    else:
+        mesh = {"rectangle": {"nx": base, "ny": base}}
+    return {**mesh, "refine": levels} if levels else mesh
 
 
 FIELDS = [
@@ -199,12 +231,11 @@ def solve_one(
     from wrinkle.solvers import ConvergenceError, follow_load_path
     from wrinkle.solvers.linear import make_linear_solver
 
-    start = time.perf_counter()
     name, overrides = CASES[problem]
-    case = read_case(
-        ROOT / "examples" / f"{name}.toml",
-        overrides={**overrides, "mesh": mesh_overrides(problem, n)},
-    )
+    with tempfile.TemporaryDirectory(prefix="scale-mesh-") as scratch:
+        mesh = mesh_overrides(problem, n, Path(scratch))  # a gmsh mesh: before the clock
+        start = time.perf_counter()
+        case = read_case(CASE_FILES[name], overrides={**overrides, "mesh": mesh})
     model = case.model
     steps = case.settings.steps
     # the case's load steps, no cut-back: a failed step ends the run
@@ -253,7 +284,7 @@ def solve_one(
     result = float("nan")
     if failed is None:
         u = results.final.displacement
-        if name == "airbag":
+        if name.startswith("airbag"):
             centre = case.probes["centre"]
             result = 1e3 * float(u.reshape(-1, 3)[centre, 2].mean())
         else:
