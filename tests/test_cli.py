@@ -181,7 +181,8 @@ BAD_INPUTS = [
 def test_bad_input_gives_one_line_and_status_2(tmp_path, capsys, what, edit, fragment):
     if what == "degenerate element":
         points = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0]], dtype=float)
-        _write_mesh(tmp_path, points, np.array([[0, 1, 3], [0, 1, 2]]))
+        # the collinear element ordered as its neighbour across the edge 0-1 needs
+        _write_mesh(tmp_path, points, np.array([[0, 1, 3], [1, 0, 2]]))
     if what == "duplicate element":
         points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=float)
         _write_mesh(tmp_path, points, np.array([[0, 1, 2], [1, 2, 0]]))

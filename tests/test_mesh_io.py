@@ -198,8 +198,9 @@ def test_unused_node_is_dropped_and_sets_renumbered(tmp_path):
     "cells, message",
     [
         (
-            [("triangle", [[0, 1, 2], [0, 1, 4]])],  # node 4 at (2, 0) lies on the line 0-1
-            r"element 1 \(nodes \[0, 1, 4\]\) has zero area",
+            # node 4 at (2, 0) lies on the line 0-1 (ordered 1, 0 as its neighbour needs)
+            [("triangle", [[0, 1, 2], [1, 0, 4]])],
+            r"element 1 \(nodes \[1, 0, 4\]\) has zero area",
         ),
         ([("triangle", [[0, 1, 2], [0, 2, 3], [2, 0, 1]])], r"elements \[0, 2\] are duplicates"),
         ([("triangle", [[0, 1, 2], [3, 3, 1]])], r"element 1 repeats a node"),

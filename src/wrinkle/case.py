@@ -127,6 +127,8 @@ class _Reader:
             self.fail(where, f"'{key}' must be a list of 3 values [x, y, z], got {value!r}")
         for item in value:
             ok = isinstance(item, (int, float)) and not isinstance(item, bool)
+            if ok and not math.isfinite(item):
+                self.fail(where, f"'{key}' must be finite, got {value!r}")
             ok = ok or (allow_free and item == "free") or (expressions and isinstance(item, str))
             if not ok:
                 self.fail(where, f"'{key}' has a bad component {item!r}")
@@ -210,6 +212,10 @@ class Case:
         except ConvergenceError as error:
             self._label(error.results)
             raise
+        except ValueError as error:  # the model's checks (supports, scale): name the file
+            if isinstance(error, CaseError) or self.source is None:
+                raise
+            raise CaseError(f"{self.source}: {error}") from None
         self._label(results)
         return results
 

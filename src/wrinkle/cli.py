@@ -18,7 +18,10 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+import warnings
 from pathlib import Path
+
+import numpy as np
 
 from wrinkle import __version__
 from wrinkle.solvers import ConvergenceError
@@ -76,7 +79,11 @@ def main(argv: list[str] | None = None) -> int:
         level=logging.INFO if args.verbose else logging.WARNING, format="%(message)s"
     )
     try:
-        return args.run(args)
+        # no numpy warning reaches the terminal: every result is checked for finite numbers
+        # and an admissible state before it is accepted, and a failure says so in one line
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return args.run(args)
     except ConvergenceError as error:
         print(f"wrinkle: not converged: {error}", file=sys.stderr)
         return 1

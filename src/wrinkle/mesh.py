@@ -81,6 +81,20 @@ class Mesh:
         if np.any(counts > 1):
             dup = np.flatnonzero(np.all(key == key[first[counts > 1][0]], axis=1))
             raise ValueError(f"elements {dup.tolist()} are duplicates (same three nodes)")
+        # every triangle goes round the same way: then each directed edge (a -> b) belongs
+        # to one triangle at most, its neighbour across the edge running b -> a
+        directed = triangles[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2).astype(np.int64)
+        keys = directed[:, 0] * nodes.shape[0] + directed[:, 1]
+        unique_keys, key_counts = np.unique(keys, return_counts=True)
+        if np.any(key_counts > 1):
+            shared = unique_keys[np.argmax(key_counts > 1)]
+            first_pair = np.flatnonzero(keys == shared) // 3
+            a, b = divmod(int(shared), nodes.shape[0])
+            raise ValueError(
+                f"elements {first_pair.tolist()} are oriented oppositely: both run their shared "
+                f"edge from node {a} to node {b} (an inverted element: the nodes of every "
+                "triangle must go round the same way); reverse the node order of one of them"
+            )
         self.nodes = nodes
         self.triangles = triangles.astype(np.int64)
         self.node_sets = _checked_sets(self.node_sets, "node", nodes.shape[0])

@@ -501,6 +501,7 @@ class Model:
             )
         self.check_supports()
         system = self.discretise()
+        system.check_resolvable()
         results = Results(self)
         first_guess = None
         if coarse and settings.nested and u0 is None:

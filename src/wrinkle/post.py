@@ -22,7 +22,15 @@ from numpy.typing import ArrayLike
 
 from wrinkle.kinematics import right_cauchy_green
 from wrinkle.materials.base import Material, tangent_of
-from wrinkle.wrinkling import SLACK, STATE_NAMES, TAUT, WRINKLED, Wrinkling, WrinklingResponse
+from wrinkle.wrinkling import (
+    SLACK,
+    STATE_NAMES,
+    TAUT,
+    WRINKLED,
+    Wrinkling,
+    WrinklingError,
+    WrinklingResponse,
+)
 
 if TYPE_CHECKING:
     from wrinkle.model import Model
@@ -171,6 +179,9 @@ class PointResponse:
     principal_stress: np.ndarray
 
 
+SINGULAR_RATIO = 1e-14  # material_response: det C / (tr C)^2 of a singular F
+
+
 def material_response(material: Material | Wrinkling, F: ArrayLike) -> PointResponse:
     """Wrinkling response of ``material`` to the in-plane deformation gradient F.
 
@@ -184,11 +195,21 @@ def material_response(material: Material | Wrinkling, F: ArrayLike) -> PointResp
     if not np.all(np.isfinite(F)):
         raise ValueError("material_response: F must be finite")
     C = (F.T @ F)[None]
-    if not np.linalg.det(C[0]) > 0:
+    # singular to round-off: det C at most 1e-14 (tr C)^2 (a stretch ratio below about 1e-7)
+    if not np.linalg.det(C[0]) > SINGULAR_RATIO * np.trace(C[0]) ** 2:
         raise ValueError("material_response: F is singular (the material point is collapsed)")
     wrinkling = material if isinstance(material, Wrinkling) else Wrinkling(material)
-    r = wrinkling.response(C, tangent=True)
+    try:
+        r = wrinkling.response(C, tangent=True)
+    except WrinklingError:
+        raise ValueError(
+            "material_response: the wrinkling conditions have no admissible solution found at "
+            "this F (a state crushed across the tension)"
+        ) from None
     q = plane_quantities(C, r)
+    numbers = (r.stress, tangent_of(r), r.thickness, r.energy, q.principal_stress)
+    if not all(np.all(np.isfinite(value)) for value in numbers if value is not None):
+        raise ValueError("material_response: the response at this F is not finite")
     return PointResponse(
         state=STATE_NAMES[int(r.state[0])],
         stress=r.stress[0],

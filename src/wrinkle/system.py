@@ -13,6 +13,7 @@ Units are consistent units; displacement vectors are (n_dofs,) = (3 n_nodes,), n
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields
 
@@ -101,6 +102,15 @@ def _concatenate_results(results: list[ElementResult], inverse: np.ndarray) -> E
     )
 
 
+# check_resolvable: the material stiffness (force/length) double precision can evaluate (its
+# squares, in the energy, and its products with strains of 1e-16 must stay normal numbers);
+# the largest prescribed displacement, in mesh sizes; the largest round-off floor of the
+# convergence test, relative to the force scale of the loads (an answer to 1 %)
+STIFFNESS_RANGE = (1e-100, 1e100)
+MAX_MOTION = 1e6
+MAX_ROUND_OFF = 1e-2
+
+
 class DiscreteSystem:
     """The discretised membrane: element groups, loads and supports on a fixed pattern.
 
@@ -187,6 +197,51 @@ class DiscreteSystem:
             per_element = g.area * np.linalg.norm(g.shape_gradient.reshape(-1, 6), axis=1)
             total += float(stiffness * np.linalg.norm(per_element * (1.0 + coordinate_noise))) ** 2
         return float(10 * np.finfo(float).eps * np.sqrt(total))
+
+    def check_resolvable(self) -> None:
+        """Raise ValueError, naming the input, if the problem cannot be solved in double
+        precision: a material stiffness (its reference stiffness, N/m) outside
+        [STIFFNESS_RANGE]; prescribed displacements more than MAX_MOTION times the mesh's
+        size; loads whose forces overflow; or loads so small beside the stiffness that the
+        round-off floor of the convergence test (``force_round_off``) is more than
+        MAX_ROUND_OFF of their force scale (the scale of the reference state at load factor 1,
+        ``StepProblem.evaluate``): the test could not tell such loads from none."""
+        low, high = STIFFNESS_RANGE
+        for index, (_, elements) in enumerate(self.groups):
+            k = elements.material.reference_stiffness
+            if not (math.isfinite(k) and low <= k <= high):
+                raise ValueError(
+                    f"material {index + 1}: its stiffness (E t, about {k:.3g} force/length) is "
+                    f"outside what double precision can evaluate ({low:.0e} to {high:.0e}); "
+                    "check the units of E and thickness"
+                )
+        extent = float(np.ptp(self.mesh.nodes, axis=0).max())
+        largest = float(np.abs(np.where(self.constrained, self.prescribed, 0.0)).max(initial=0.0))
+        if largest > MAX_MOTION * extent:
+            raise ValueError(
+                f"a prescribed displacement of {largest:.3g} is more than {MAX_MOTION:.0e} times "
+                f"the mesh's size ({extent:.3g}); check the units of the displacements"
+            )
+        try:
+            reference = self.at(1.0).evaluate(np.zeros(self.n_dofs), stiffness=False)
+        except EvaluationFailure as error:
+            raise ValueError(
+                f"the model cannot be evaluated at its reference state: {error}"
+            ) from None
+        forces = np.concatenate([reference.residual, reference.reactions])
+        if not (np.all(np.isfinite(forces)) and math.isfinite(reference.force_scale)):
+            raise ValueError(
+                "the loads are too large to evaluate in double precision (their forces "
+                "overflow); check the units of the loads"
+            )
+        scale, floor = reference.force_scale, self.force_round_off
+        if scale > 0 and floor > MAX_ROUND_OFF * scale:
+            raise ValueError(
+                f"the loads are too small for the sheet's stiffness: the round-off of the "
+                f"sheet's forces ({floor:.3g}) is more than {MAX_ROUND_OFF:g} of the loads' "
+                f"force scale ({scale:.3g}), so equilibrium cannot be resolved in double "
+                "precision; check the units of E, thickness, the loads and the displacements"
+            )
 
     def motion_force(self, prescribed: np.ndarray | None = None) -> float:
         """The force scale of a prescribed motion, force: the norm of the reactions of a

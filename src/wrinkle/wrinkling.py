@@ -370,10 +370,64 @@ class Wrinkling:
             valid[retry] = converged[retry] & admissible
             if not np.all(valid):
                 raise WrinklingError(np.flatnonzero(~valid))
+        self._refine(e, phi, b, g_tolerance, plain_stress, plain_tangent)
+        c, s = np.cos(phi), np.sin(phi)
         turned = np.mod(phi, np.pi)
         moved = np.flatnonzero(turned != phi)  # w -> -w: the direction is recomputed
         c[moved], s[moved] = np.cos(turned[moved]), np.sin(turned[moved])
         return turned, np.maximum(b, 0.0), (c, s)
+
+    def _modified_tolerance(self, e, phi, b, g_tolerance):
+        """The tolerance on |g| at the modified state C' = C + b w (x) w, (m,):
+        max(tolerance |N'|, 64 eps |D'|), at most ``g_tolerance`` (the plain law's)."""
+        modified, _, _ = self._modified_response(e, np.cos(phi), np.sin(phi), b, tangent=True)
+        tolerance = np.maximum(
+            self.tolerance * _row_norms(modified.stress.reshape(-1, 4)),
+            64.0 * np.finfo(float).eps * _row_norms(modified.tangent.reshape(-1, 9)),
+        )
+        return np.minimum(tolerance, g_tolerance)
+
+    def _unresolved(self, e, phi, b, tolerance):
+        """Rows whose solution misses ``tolerance`` or is not admissible under it, (m,) bool."""
+        c, s = np.cos(phi), np.sin(phi)
+        (g0, g1), (s0, s1, _) = self._residual(e, c, s, b)
+        return ~(
+            (np.sqrt(g0 * g0 + g1 * g1) <= tolerance) & (s0 + s1 >= -tolerance) & (b >= -1e-12)
+        )
+
+    def _refine(self, e, phi, b, g_tolerance, plain_stress, plain_tangent):
+        """Solve again (phi, b in place) where the solution misses the tolerance of the
+        modified state (``_modified_tolerance``) or is inadmissible under it: Newton from it,
+        then, where that fails, the angle search and Newton. The first tolerance is relative
+        to the plain law at C, which for a crushed state (C22 -> 0) is orders of magnitude
+        larger than the wrinkled stress: there it accepted a remaining compression across the
+        wrinkles (the neo-Hookean sheet at F = diag(1.1, 0.01) stopped with N22 = -0.0015
+        against N11 = 0.25, at F = diag(1.01, 1e-4) on a compressive root). WrinklingError
+        where no admissible solution is found."""
+        tolerance = self._modified_tolerance(e, phi, b, g_tolerance)
+        rows = self._unresolved(e, phi, b, tolerance)
+        if not np.any(rows):
+            return
+        self._newton(e, phi, b, tolerance, rows)
+        tolerance = np.where(rows, self._modified_tolerance(e, phi, b, g_tolerance), tolerance)
+        rows &= self._unresolved(e, phi, b, tolerance)
+        if not np.any(rows):
+            return
+        retry = np.flatnonzero(rows)
+        e_retry = tuple(component[retry] for component in e)
+        phi[retry], b[retry] = self._angle_search(
+            e_retry, plain_stress[retry], plain_tangent[retry]
+        )
+        tolerance[retry] = self._modified_tolerance(
+            e_retry, phi[retry], b[retry], g_tolerance[retry]
+        )
+        self._newton(e, phi, b, tolerance, rows)
+        tolerance[retry] = self._modified_tolerance(
+            e_retry, phi[retry], b[retry], g_tolerance[retry]
+        )
+        failed = self._unresolved(e_retry, phi[retry], b[retry], tolerance[retry])
+        if np.any(failed):
+            raise WrinklingError(retry[failed])
 
     def _admissible(self, e, phi, b, g_tolerance):
         """b >= 0 and non-negative uniaxial tension at a solution, (m,) bool, and the

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -140,13 +141,19 @@ def try_evaluate(
         return None
     if not np.all(np.isfinite(evaluation.residual)):
         return None
+    if not (math.isfinite(evaluation.residual_norm) and math.isfinite(evaluation.force_scale)):
+        return None  # forces so large that their norm overflows
     return evaluation
 
 
 def is_converged(evaluation: Evaluation, tolerance: float) -> bool:
-    """Residual-force criterion |f - f*| <= tolerance * max(|f_ext|, |reactions|), or a
-    residual at the level of round-off."""
-    return evaluation.residual_norm <= max(tolerance * evaluation.force_scale, evaluation.round_off)
+    """Residual-force criterion |f - f*| <= tolerance * max(|f_ext|, |reactions|, F_motion),
+    or a residual at the level of round-off; never true where the residual or the scale is
+    not finite (a test that infinite forces would pass)."""
+    residual, scale = evaluation.residual_norm, evaluation.force_scale
+    if not (math.isfinite(residual) and math.isfinite(scale)):
+        return False
+    return residual <= max(tolerance * scale, evaluation.round_off)
 
 
 def stiffness_scale(K: sp.csr_matrix, free: np.ndarray) -> float:

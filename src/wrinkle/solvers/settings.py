@@ -54,6 +54,12 @@ def _is_integer(value: Any, minimum: int) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and value >= minimum
 
 
+# the loosest tolerance: a residual of 1 % of the forces (Abaqus' default is 0.5 %). At a
+# tolerance of 1 or more every start would pass, the residual at the start being at most the
+# applied forces.
+MAX_TOLERANCE = 1e-2
+
+
 @dataclass(frozen=True)
 class SolverSettings:
     """How a model is solved: the nonlinear method and the load stepping.
@@ -97,8 +103,8 @@ class SolverSettings:
             ),
             (
                 "tolerance",
-                lambda: _is_number(self.tolerance) and self.tolerance > 0,
-                "a number > 0",
+                lambda: _is_number(self.tolerance) and 0 < self.tolerance <= MAX_TOLERANCE,
+                f"a number in (0, {MAX_TOLERANCE}]",
             ),
             (
                 "max_iterations",
@@ -106,7 +112,11 @@ class SolverSettings:
                 "an integer >= 1",
             ),
             ("steps", lambda: _is_integer(self.steps, 1), "an integer >= 1"),
-            ("min_step", lambda: _is_number(self.min_step) and self.min_step > 0, "a number > 0"),
+            (
+                "min_step",
+                lambda: _is_number(self.min_step) and 0 < self.min_step <= 1,
+                "a number in (0, 1]",
+            ),
             (
                 "max_step",
                 lambda: (
