@@ -51,6 +51,11 @@ _NEWTON_ITERATIONS = 40
 _GRID_ANGLES = 72
 
 
+# ``_compressed``: a wrinkled solution whose residual is within this many times the wrinkling
+# tolerance of its own stress is kept as it is
+_REFINE_SLACK = 1e3
+
+
 class WrinklingError(RuntimeError):
     """The wrinkling conditions could not be solved for some elements."""
 
@@ -198,16 +203,38 @@ class Wrinkling:
         wrinkled = np.flatnonzero(state == WRINKLED)
         if wrinkled.size:
             Cw = C[wrinkled]
+            plain_tangent_w = None if plain_tangent is None else plain_tangent[wrinkled]
             try:
-                phi_w, b_w, (c_w, s_w) = self._solve_conditions(
-                    Cw,
-                    plain.stress[wrinkled],
-                    None if plain_tangent is None else plain_tangent[wrinkled],
+                phi_w, b_w, (c_w, s_w), g_tolerance = self._solve_conditions(
+                    Cw, plain.stress[wrinkled], plain_tangent_w
                 )
+                C_modified = _modified_tensor(Cw, c_w, s_w, b_w)
+                modified = self.material.response(C_modified, tangent=tangent)
+                loose = self._compressed(c_w, s_w, modified.stress, g_tolerance)
+                if np.any(loose):  # rare: crushed states (``_refine``)
+                    rows = np.flatnonzero(loose)
+                    phi_r, b_r = phi_w[rows], b_w[rows]
+                    Cr = Cw[rows]
+                    e_rows = (0.5 * (Cr[:, 0, 0] - 1.0), 0.5 * (Cr[:, 1, 1] - 1.0), Cr[:, 0, 1])
+                    tangent_r = (
+                        tangent_of(self.material.response(Cr, tangent=True))
+                        if plain_tangent_w is None
+                        else plain_tangent_w[rows]
+                    )
+                    self._refine(
+                        e_rows,
+                        phi_r,
+                        b_r,
+                        g_tolerance[rows],
+                        plain.stress[wrinkled][rows],
+                        tangent_r,
+                    )
+                    phi_w[rows], b_w[rows] = np.mod(phi_r, np.pi), np.maximum(b_r, 0.0)
+                    c_w[rows], s_w[rows] = np.cos(phi_w[rows]), np.sin(phi_w[rows])
+                    C_modified = _modified_tensor(Cw, c_w, s_w, b_w)
+                    modified = self.material.response(C_modified, tangent=tangent)
             except WrinklingError as error:  # rows of the wrinkled subset -> rows of C
                 raise WrinklingError(wrinkled[error.elements]) from None
-            C_modified = _modified_tensor(Cw, c_w, s_w, b_w)
-            modified = self.material.response(C_modified, tangent=tangent)
             stress[wrinkled] = modified.stress
             thickness[wrinkled] = modified.thickness
             energy[wrinkled] = self.material.energy(C_modified)
@@ -370,12 +397,26 @@ class Wrinkling:
             valid[retry] = converged[retry] & admissible
             if not np.all(valid):
                 raise WrinklingError(np.flatnonzero(~valid))
-        self._refine(e, phi, b, g_tolerance, plain_stress, plain_tangent)
-        c, s = np.cos(phi), np.sin(phi)
         turned = np.mod(phi, np.pi)
         moved = np.flatnonzero(turned != phi)  # w -> -w: the direction is recomputed
         c[moved], s[moved] = np.cos(turned[moved]), np.sin(turned[moved])
-        return turned, np.maximum(b, 0.0), (c, s)
+        return turned, np.maximum(b, 0.0), (c, s), g_tolerance
+
+    def _compressed(self, c, s, stress, g_tolerance):
+        """Rows of a wrinkled solution, w = (c, s), stress N' (m, 2, 2) at C', whose |N' w| or
+        compression across the tension exceeds _REFINE_SLACK times the tolerance relative to
+        N' (and the round-off of the material's reference stiffness), at most the plain law's
+        ``g_tolerance``, (m,) bool: where the first solve stopped short (``_refine``)."""
+        s0, s1, s2 = stress[:, 0, 0], stress[:, 1, 1], stress[:, 0, 1]
+        g0, g1 = c * s0 + s * s2, s * s1 + c * s2
+        allowed = np.minimum(
+            np.maximum(
+                _REFINE_SLACK * self.tolerance * _row_norms(stress.reshape(-1, 4)),
+                64.0 * np.finfo(float).eps * self.reference_stiffness,
+            ),
+            g_tolerance,
+        )
+        return (np.sqrt(g0 * g0 + g1 * g1) > allowed) | (s0 + s1 < -allowed)
 
     def _modified_tolerance(self, e, phi, b, g_tolerance):
         """The tolerance on |g| at the modified state C' = C + b w (x) w, (m,):
