@@ -21,7 +21,7 @@ import numpy as np
 
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.materials.base import Material
-from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
+from wrinkle.mesh import Mesh, annulus, check_fits, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
 from wrinkle.output import ResultWriter
 from wrinkle.refinement import MAX_REFINED_ELEMENTS, refine
@@ -114,6 +114,20 @@ class _Reader:
             self.fail(where, f"'{key}' must be >= {minimum}, got {value!r}")
         return value
 
+    def tables(self, data: dict, key: str, single: bool = False) -> list[dict]:
+        """The array of tables [[key]] (or, where ``single``, one [key] table) as a list;
+        [] where absent; fails naming it if it is anything else or holds a non-table."""
+        value = data.get(key, [])
+        if single and isinstance(value, dict):
+            return [value]
+        shape = f"[{key}] or [[{key}]]" if single else f"[[{key}]]"
+        if not isinstance(value, list):
+            self.fail(f"[[{key}]]", f"must be {shape} tables, got {value!r}")
+        for index, item in enumerate(value):
+            if not isinstance(item, dict):
+                self.fail(f"[[{key}]] {index + 1}", f"must be a table ({shape}), got {item!r}")
+        return value
+
     def string(self, table: dict, key: str, where: str) -> str:
         value = table[key]
         if not isinstance(value, str):
@@ -156,10 +170,15 @@ class _Reader:
 def read_case_data(path: str | Path) -> dict:
     """The tables of the TOML case file ``path`` as a dict; CaseError if unreadable."""
     path = Path(path)
+    if path.is_dir():
+        raise CaseError(f"{path}: is a folder, not a case file")
     if not path.is_file():
         raise CaseError(f"{path}: case file not found")
     try:
-        return tomllib.loads(path.read_text())
+        # utf-8-sig: a byte-order mark (some Windows editors write one) is not TOML
+        return tomllib.loads(path.read_text(encoding="utf-8-sig"))
+    except OSError as error:
+        raise CaseError(f"{path}: cannot be read ({error.strerror})") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise CaseError(f"{path}: not valid TOML: {error}") from None
 
@@ -276,16 +295,22 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
             f"'refine' = {times} would make {base.n_elements * 4**times:,} elements "
             f"(at most {MAX_REFINED_ELEMENTS:,})",
         )
+    try:
+        check_fits(base.n_elements * 4**times, f"'refine' = {times}")
+    except ValueError as error:
+        reader.fail("[mesh]", str(error))
     meshes = [base]
     for _ in range(times):
         meshes.append(refine(meshes[-1]).mesh)
     mesh = meshes[-1]
     model = _read_model(reader, data, mesh)
     probes = {}
-    for index, table in enumerate(data.get("probe", [])):
+    for index, table in enumerate(reader.tables(data, "probe")):
         where = f"[[probe]] {index + 1}"
         reader.keys(table, where, {"nodes"}, {"name"})
         name = reader.string(table, "name", where) if "name" in table else table["nodes"]
+        if str(name) in probes:
+            reader.fail(where, f"probe name {str(name)!r} is used twice (each probe needs its own)")
         probes[str(name)] = reader.nodes(mesh, table, where)
     settings = _read_solver(reader, data.get("solver", {}))
     coarse = []
@@ -309,7 +334,9 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
 def _read_model(reader: _Reader, data: dict, mesh: Mesh) -> Model:
     """The model of the case's materials, supports and loads on ``mesh``."""
     model = Model(mesh)
-    materials = data["material"] if isinstance(data["material"], list) else [data["material"]]
+    materials = reader.tables(data, "material", single=True)
+    if not materials:
+        reader.fail("[material]", "at least one material is needed")
     for index, table in enumerate(materials):
         _read_material(
             reader,
@@ -317,12 +344,12 @@ def _read_model(reader: _Reader, data: dict, mesh: Mesh) -> Model:
             table,
             f"[[material]] {index + 1}" if len(materials) > 1 else "[material]",
         )
-    supports = data.get("support", [])
-    if not isinstance(supports, list) or not supports:
+    supports = reader.tables(data, "support")
+    if not supports:
         reader.fail("[[support]]", "at least one support is needed")
     for index, table in enumerate(supports):
         _read_support(reader, model, table, f"[[support]] {index + 1}")
-    for index, table in enumerate(data.get("load", [])):
+    for index, table in enumerate(reader.tables(data, "load")):
         _read_load(reader, model, table, f"[[load]] {index + 1}")
     try:
         model.check_supports()

@@ -34,6 +34,9 @@ def _run(args: argparse.Namespace) -> int:
     from wrinkle.progress import Progress
 
     case = read_case(args.case)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out}: is a file, not a folder for the results")
     progress = Progress(quiet=args.quiet)
     try:
         case.run(args.out, on_step=progress.step)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import io
 import math
+import os
 import re
 import tempfile
 from dataclasses import dataclass, field
@@ -187,6 +188,7 @@ def rectangle(width: float, height: float, nx: int, ny: int, diagonal: str = "ri
         raise ValueError(f"rectangle: width and height must be > 0, got {width}, {height}")
     if int(nx) < 1 or int(ny) < 1:
         raise ValueError(f"rectangle: nx and ny must be >= 1, got {nx}, {ny}")
+    check_fits(2 * int(nx) * int(ny), f"rectangle: nx = {nx} by ny = {ny}")
     x = np.linspace(0.0, width, nx + 1)
     y = np.linspace(0.0, height, ny + 1)
     X, Y = np.meshgrid(x, y)
@@ -207,6 +209,33 @@ def rectangle(width: float, height: float, nx: int, ny: int, diagonal: str = "ri
     grid = np.arange(nodes.shape[0]).reshape(ny + 1, nx + 1)
     sets = {"bottom": grid[0], "top": grid[-1], "left": grid[:, 0], "right": grid[:, -1]}
     return Mesh(nodes, triangles, sets)
+
+
+# the peak memory of a solve per element: 6.3 GB for the 10^6-element airbag (PARDISO's LDL^T
+# factor; docs/performance.md), a lower bound (its bending version needs 12.5 GB)
+BYTES_PER_ELEMENT = 6_300
+
+
+def machine_memory() -> int | None:
+    """Physical memory of this machine in bytes, None where the system does not say."""
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (AttributeError, OSError, ValueError):
+        return None
+
+
+def check_fits(n_elements: int, what: str) -> None:
+    """Raise ValueError, before anything is allocated, if a mesh of ``n_elements`` triangles
+    cannot be solved in this machine's memory (BYTES_PER_ELEMENT each, a lower bound); the
+    message starts with ``what`` and gives the estimate."""
+    memory = machine_memory()
+    needed = n_elements * BYTES_PER_ELEMENT
+    if memory is not None and needed > memory:
+        raise ValueError(
+            f"{what} gives {n_elements:.3g} elements; solving them needs at least "
+            f"{needed / 1e9:.3g} GB ({BYTES_PER_ELEMENT / 1e3:.1f} kB per element, measured), "
+            f"more than this machine's {memory / 1e9:.3g} GB"
+        )
 
 
 def _check_count(generator: str, name: str, value, minimum: int) -> int:
@@ -277,6 +306,7 @@ def annulus(
         )
     n_radial = _check_count("annulus", "n_radial", n_radial, 1)
     n_circumferential = _check_count("annulus", "n_circumferential", n_circumferential, 3)
+    check_fits(2 * n_radial * n_circumferential, "annulus: n_radial by n_circumferential")
     radii = np.linspace(inner_radius, outer_radius, n_radial + 1)
     nodes, triangles = _polar_rings(radii, n_circumferential)
     sets = {
@@ -299,6 +329,7 @@ def disk(radius: float, n_radial: int, n_circumferential: int) -> Mesh:
     radius = _check_length("disk", "radius", radius)
     n_radial = _check_count("disk", "n_radial", n_radial, 1)
     n_circumferential = _check_count("disk", "n_circumferential", n_circumferential, 3)
+    check_fits(2 * n_radial * n_circumferential, "disk: n_radial by n_circumferential")
     radii = radius * np.arange(1, n_radial + 1) / n_radial
     ring_nodes, ring_triangles = _polar_rings(radii, n_circumferential)
     first = 1 + np.arange(n_circumferential)
@@ -330,6 +361,7 @@ def sphere(radius: float, n: int) -> Mesh:
     """
     radius = _check_length("sphere", "radius", radius)
     n = _check_count("sphere", "n", n, 1)
+    check_fits(n * n, f"sphere: n = {n}")
     k = np.repeat(np.arange(n + 1), np.arange(n + 1, 0, -1))
     row_start = k * (2 * n + 3 - k) // 2
     j = np.arange(k.size) - row_start
@@ -391,6 +423,7 @@ def cylinder(
     n_circumferential = _check_count("cylinder", "n_circumferential", n_circumferential, 3)
     n_axial = _check_count("cylinder", "n_axial", n_axial, 1)
     n_cap = _check_count("cylinder", "n_cap", n_cap, 1)
+    check_fits(2 * n_circumferential * (n_axial + 2 * n_cap), "cylinder: the wall and the end caps")
     n = n_circumferential
     # the wall: an annulus's connectivity with its circles placed along x (the annulus's
     # counter-clockwise order, mapped onto the tube, faces inwards: two nodes swapped)

@@ -409,6 +409,19 @@ def _at(variables: dict[str, np.ndarray], index: int) -> str:
     return ", ".join(f"{name} = {variables[name][index]:.6g}" for name in ("x", "y", "z"))
 
 
+def _too_deep(label: str, text: object) -> ValueError:
+    """The error of a selector or expression whose parse or evaluation exceeds Python's
+    recursion limit (about 80 nested parentheses, or a chain of several hundred operators);
+    the text is quoted shortened."""
+    shown = str(text)
+    if len(shown) > 60:
+        shown = shown[:40] + " ... " + shown[-15:]
+    return ValueError(
+        f'{label} "{shown}" ({len(str(text))} characters) is nested too deeply or chains too '
+        "many operators to evaluate: simplify it, or name a node set of the mesh"
+    )
+
+
 def select_nodes(mesh: Mesh, selector: str, tolerance: float | None = None) -> np.ndarray:
     """Sorted unique indices (k,) of the nodes a selector picks.
 
@@ -420,8 +433,17 @@ def select_nodes(mesh: Mesh, selector: str, tolerance: float | None = None) -> n
     RELATIVE_TOLERANCE * mesh_size(mesh). Raises ValueError quoting the selector: syntax
     errors with their column (counted from 1), unknown names with the names allowed and the
     node sets, a NaN in a comparison (e.g. sqrt of a negative number) with the node, and a
-    selector that matches no node; TypeError if the selector is not a string.
+    selector that matches no node or is nested too deeply to evaluate; TypeError if the
+    selector is not a string.
     """
+    try:
+        return _select_nodes(mesh, selector, tolerance)
+    except RecursionError:
+        raise _too_deep("selector", selector) from None
+
+
+def _select_nodes(mesh: Mesh, selector: str, tolerance: float | None) -> np.ndarray:
+    """``select_nodes`` without the guard against deep nesting."""
     if not isinstance(selector, str):
         raise TypeError(f"selector must be a node-set name or a condition, got {selector!r}")
     for name in (selector, selector.strip()):
@@ -478,8 +500,16 @@ def evaluate_expression(text: str | float, nodes: np.ndarray, tolerance: float =
     with ``tolerance``). A number (int or float) instead of text is taken as it is.
     nodes: (k, 3) or (k, 2) reference coordinates. Used for position-dependent prescribed
     displacements and loads. Raises ValueError quoting the expression for bad syntax or a
-    value that is not finite (naming the position).
+    value that is not finite (naming the position), or nesting too deep to evaluate.
     """
+    try:
+        return _evaluate_expression(text, nodes, tolerance)
+    except RecursionError:
+        raise _too_deep("expression", text) from None
+
+
+def _evaluate_expression(text: str | float, nodes: np.ndarray, tolerance: float) -> np.ndarray:
+    """``evaluate_expression`` without the guard against deep nesting."""
     variables = _coordinates(nodes, "evaluate_expression")
     shape = variables["x"].shape
     if isinstance(text, Real) and not isinstance(text, bool):

@@ -142,9 +142,15 @@ class Wrinkling:
         self.tolerance = tolerance
         # stress that round-off in E = (C - I)/2 alone produces: a principal stress above
         # -stress_noise is not a compression (else an undeformed membrane would wrinkle by noise)
-        tangent = material.response(np.eye(2)[None]).tangent
+        with np.errstate(all="ignore"):
+            tangent = material.response(np.eye(2)[None]).tangent
         if tangent is None:
             raise ValueError("the material gives no tangent")
+        if not np.all(np.isfinite(tangent)):
+            raise ValueError(
+                "the material's stiffness is not finite in double precision (check the units "
+                "of its moduli and thickness)"
+            )
         #: |dN/dE| of the material at C = I, force per length
         self.reference_stiffness = float(np.linalg.norm(tangent))
         self.stress_noise = 64.0 * np.finfo(float).eps * self.reference_stiffness

@@ -38,6 +38,7 @@ IN_PLANE = np.array([0, 1, 5])
 OUT_OF_PLANE = np.array([2, 3, 4])
 
 _SYMMETRY_RTOL = 1e-8
+_LARGEST_MODULUS = 1e150  # the largest |H| whose products stay finite
 _TINY = np.finfo(float).tiny
 
 
@@ -84,9 +85,13 @@ class StVenantKirchhoff:
         H = np.array(stiffness, dtype=float)
         if H.shape != (6, 6):
             raise ValueError(f"{owner}: stiffness must have shape (6, 6), got {H.shape}")
-        if not np.all(np.isfinite(H)):
-            raise ValueError(f"{owner}: stiffness must be finite")
-        scale = np.max(np.abs(H))
+        scale = np.max(np.abs(H)) if np.all(np.isfinite(H)) else np.inf
+        # its squares (eigenvalues, energies) must stay finite too
+        if not scale < _LARGEST_MODULUS:
+            raise ValueError(
+                f"{owner}: stiffness must be finite and below {_LARGEST_MODULUS:.0e} "
+                f"(max |H| = {scale:.3g}); check the units of the moduli"
+            )
         asymmetry = np.max(np.abs(H - H.T))
         if asymmetry > _SYMMETRY_RTOL * scale:
             raise ValueError(

@@ -58,6 +58,9 @@ def _is_integer(value: Any, minimum: int) -> bool:
 # tolerance of 1 or more every start would pass, the residual at the start being at most the
 # applied forces.
 MAX_TOLERANCE = 1e-2
+# the most load steps a path may aim at: each converged step is a results file, and 10^4 is
+# the number of increments of the default min_step already
+MAX_STEPS = 10_000
 
 
 @dataclass(frozen=True)
@@ -111,7 +114,11 @@ class SolverSettings:
                 lambda: self.max_iterations is None or _is_integer(self.max_iterations, 1),
                 "an integer >= 1",
             ),
-            ("steps", lambda: _is_integer(self.steps, 1), "an integer >= 1"),
+            (
+                "steps",
+                lambda: _is_integer(self.steps, 1) and self.steps <= MAX_STEPS,
+                f"an integer in [1, {MAX_STEPS}] (each converged step is written to a file)",
+            ),
             (
                 "min_step",
                 lambda: _is_number(self.min_step) and 0 < self.min_step <= 1,
