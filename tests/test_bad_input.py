@@ -260,3 +260,48 @@ def test_paths_of_the_wrong_kind(tmp_path, capsys, what):
     assert main(arguments) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and fragment in err, err
+
+
+@pytest.fixture
+def results(tmp_path, capsys):
+    """A folder of three converged steps of the base case."""
+    path = tmp_path / "case.toml"
+    path.write_text(TABLES + "\n[solver]\nsteps = 3\n")
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    capsys.readouterr()
+    return tmp_path / "out"
+
+
+@pytest.mark.parametrize(
+    "damage, fragment, drawn",
+    [
+        (lambda out: (out / "step_0003.vtu").unlink(), "step_0003.vtu: cannot read it", True),
+        (
+            lambda out: (out / "step_0003.vtu").write_text("garbage"),
+            "step_0003.vtu: cannot read it (not a valid vtu file)",
+            True,
+        ),
+        (
+            lambda out: (out / "summary.json").write_text((out / "summary.json").read_text()[:100]),
+            "summary.json: damaged, not readable as JSON",
+            False,
+        ),
+        (lambda out: (out / "summary.json").unlink(), "summary.json: not found", False),
+    ],
+    ids=["last vtu deleted", "garbage vtu", "truncated summary", "no summary"],
+)
+def test_plot_on_damaged_results(results, capsys, damage, fragment, drawn):
+    """One line naming the file, exit status 2, and the readable steps still drawn (meshio
+    printed its own error and called sys.exit(1) on a garbage .vtu, a traceback on a deleted
+    one)."""
+    pytest.importorskip("matplotlib")
+    damage(results)
+    status = main(["plot", str(results)])
+    captured = capsys.readouterr()
+    assert status == 2
+    lines = captured.err.splitlines()
+    assert len(lines) == 1 and fragment in lines[0], captured.err
+    assert ("wrote" in captured.out) == drawn, captured.out
+    if drawn:
+        assert "drew load factor 0.6667, the last readable step" in lines[0]
+        assert (results / "state.png").is_file()

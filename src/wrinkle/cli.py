@@ -55,9 +55,16 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _plot(args: argparse.Namespace) -> int:
-    from wrinkle.plot import plot_results
+    from wrinkle.plot import DamagedResults, plot_results
 
-    for path in plot_results(Path(args.directory)):
+    try:
+        paths = plot_results(Path(args.directory))
+    except DamagedResults as damaged:  # the readable steps are drawn; say what is not
+        for path in damaged.paths:
+            print(f"wrote {path}")
+        print(f"wrinkle: {damaged}", file=sys.stderr)
+        return 2
+    for path in paths:
         print(f"wrote {path}")
     return 0
 

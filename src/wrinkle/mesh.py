@@ -751,7 +751,7 @@ def read_mesh(path: str | Path) -> Mesh:
     messages are the indices of the (split) triangles in file order, node numbers are the
     file's points counted from 0, both before unused nodes are dropped.
     """
-    meshio = require_meshio()
+    require_meshio()  # before anything else: say what to install
     path = Path(path)
     if not path.exists():
         raise ValueError(f"mesh file {path}: no such file")
@@ -764,33 +764,40 @@ def read_mesh(path: str | Path) -> Mesh:
         except (ValueError, IndexError, UnicodeDecodeError) as error:
             detail = str(error) if isinstance(error, ValueError) else "bad $ElementData"
             raise ValueError(f"mesh file {path}: {detail}") from None
-    # meshio prints its readers' errors and, when every reader fails, calls sys.exit(1)
+    if gmsh is None:
+        data = meshio_read(path, f"mesh file {path}")
+    else:  # the file without its $ElementData sections
+        with tempfile.TemporaryDirectory() as folder:
+            stripped = Path(folder) / path.name
+            stripped.write_bytes(content)
+            data = meshio_read(stripped, f"mesh file {path}", file_format="gmsh")
+    try:
+        return _mesh_from_meshio(data, gmsh)
+    except ValueError as error:
+        raise ValueError(f"mesh file {path}: {error}") from None
+
+
+def meshio_read(path: Path, label: str, file_format: str | None = None):
+    """``meshio.read(path)`` without its prints: ValueError "<label>: cannot read it
+    (<reason>)" for a file it cannot read (meshio prints its readers' errors and, when every
+    reader fails, calls sys.exit(1))."""
+    meshio = require_meshio()
     printed = io.StringIO()
     try:
         with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(printed):
-            if gmsh is None:
-                data = meshio.read(path)
-            else:  # the file without its $ElementData sections
-                with tempfile.TemporaryDirectory() as folder:
-                    stripped = Path(folder) / path.name
-                    stripped.write_bytes(content)
-                    data = meshio.read(stripped, file_format="gmsh")
+            return meshio.read(path, file_format=file_format)
     except (Exception, SystemExit) as error:  # noqa: BLE001 -- readers raise many types
         if isinstance(error, Exception):
             lines = str(error).strip().splitlines()
             reason = lines[0] if lines else type(error).__name__
         else:  # the readers' messages come before meshio's (line-wrapped) "Error: ..."
             lines = printed.getvalue().split("Error:")[0].splitlines()
-            formats = meshio.extension_to_filetypes.get(path.suffix.lower(), ["meshio"])
+            formats = meshio.extension_to_filetypes.get(Path(path).suffix.lower(), ["meshio"])
             reason = "; ".join(
                 [f"not a valid {' or '.join(formats)} file"]
                 + [line.strip() for line in lines if line.strip()]
             )
-        raise ValueError(f"mesh file {path}: cannot read it ({reason})") from None
-    try:
-        return _mesh_from_meshio(data, gmsh)
-    except ValueError as error:
-        raise ValueError(f"mesh file {path}: {error}") from None
+        raise ValueError(f"{label}: cannot read it ({reason})") from None
 
 
 def _mesh_from_meshio(data, gmsh: _GmshElementData | None = None) -> Mesh:

@@ -145,18 +145,29 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
     against the load factor, or the largest nodal displacement if there are no probes.
     Returns the paths of the three files. Raises ValueError if no step has been written.
     """
-    from wrinkle.mesh import require_meshio
+    from wrinkle.mesh import meshio_read, require_meshio
     from wrinkle.output import HISTORY, SUMMARY
 
+    require_meshio()
     out_dir = Path(out_dir)
-    summary = json.loads((out_dir / SUMMARY).read_text(encoding="utf-8"))
-    if not summary["steps"]:
-        raise ValueError(f"{out_dir / SUMMARY}: no converged step to plot")
-    last = summary["steps"][-1]
+    summary = _read_summary(out_dir / SUMMARY)
+    # the last step whose .vtu is readable; the damaged ones after it are reported at the end
+    damaged: list[str] = []
+    for last in reversed(summary["steps"]):
+        try:
+            vtu = meshio_read(out_dir / last["file"], str(out_dir / last["file"]))
+            cell = {name: vtu.cell_data_dict[name]["triangle"] for name in vtu.cell_data}
+            displacement = vtu.point_data["displacement"]
+            break
+        except (ValueError, KeyError) as error:
+            reason = str(error) if isinstance(error, ValueError) else f"no {error} data"
+            damaged.append(
+                reason if str(out_dir) in reason else f"{out_dir / last['file']}: {reason}"
+            )
+    else:
+        raise ValueError(f"no readable step to plot: {damaged[0]}")
     units = summary.get("units") or {}
-    vtu = require_meshio().read(out_dir / last["file"])
-    cell = {name: vtu.cell_data_dict[name]["triangle"] for name in vtu.cell_data}
-    x = vtu.points + vtu.point_data["displacement"]
+    x = vtu.points + displacement
     view = _View(x, vtu.cells_dict["triangle"], _unit(units, "length"))
     where = f"load factor {last['load_factor']:.4g}"
     if not summary["converged"]:
@@ -171,7 +182,42 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
             summary, out_dir / HISTORY, _unit(units, "length"), out_dir / "load_displacement.png"
         ),
     ]
+    if damaged:
+        raise DamagedResults(
+            f"{damaged[0]}; drew load factor {last['load_factor']:.4g}, the last readable step",
+            paths,
+        )
     return paths
+
+
+class DamagedResults(ValueError):
+    """Some results files could not be read; ``paths`` are the pictures drawn from the
+    readable ones."""
+
+    def __init__(self, message: str, paths: list[Path]):
+        super().__init__(message)
+        self.paths = paths
+
+
+def _read_summary(path: Path) -> dict:
+    """summary.json with its converged steps; ValueError naming the file if it is missing,
+    not valid JSON, or lacks the steps."""
+    try:
+        summary = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ValueError(f"{path}: not found (is this a folder written by wrinkle run?)") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise ValueError(f"{path}: damaged, not readable as JSON ({error})") from None
+    steps = summary.get("steps") if isinstance(summary, dict) else None
+    if not isinstance(steps, list) or not all(isinstance(step, dict) for step in steps):
+        raise ValueError(f"{path}: damaged, it has no list of steps")
+    if not steps:
+        raise ValueError(f"{path}: no converged step to plot")
+    if not all({"file", "load_factor"} <= set(step) for step in steps):
+        raise ValueError(f"{path}: damaged, a step lacks its file or load factor")
+    for key in ("converged", "message"):
+        summary.setdefault(key, False if key == "converged" else "")
+    return summary
 
 
 class _View:
