@@ -305,3 +305,47 @@ def test_plot_on_damaged_results(results, capsys, damage, fragment, drawn):
     if drawn:
         assert "drew load factor 0.6667, the last readable step" in lines[0]
         assert (results / "state.png").is_file()
+
+
+def test_ctrl_c_ends_the_run_cleanly(tmp_path):
+    """SIGINT (Ctrl-C) during a run: exit status 130, one line, summary.json valid and saying
+    it was interrupted, every step it lists on disk."""
+    import json
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    path = tmp_path / "case.toml"
+    slow = TABLES.replace("nx = 2, ny = 2", "nx = 48, ny = 48")
+    path.write_text(slow + "\n[solver]\nsteps = 200\ntolerance = 1e-10\n")
+    out = tmp_path / "out"
+    run = subprocess.Popen(
+        [sys.executable, "-m", "wrinkle", "run", str(path), "--out", str(out), "--quiet"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 120
+    while not (out / "step_0002.vtu").exists():
+        assert run.poll() is None, run.communicate()
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    run.send_signal(signal.SIGINT)
+    stdout, stderr = run.communicate(timeout=60)
+    assert run.returncode == 130, stderr
+    assert stderr.count("\n") == 1 and "interrupted" in stderr, stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["converged"] is False and summary["message"] == "interrupted"
+    assert summary["steps"] and all((out / step["file"]).is_file() for step in summary["steps"])
+
+
+def test_a_new_run_leaves_nothing_of_an_old_one(results, capsys):
+    """A rerun into a folder of three steps and pictures, with one step: only its own files."""
+    pytest.importorskip("matplotlib")
+    assert main(["plot", str(results)]) == 0
+    case = results.parent / "case.toml"
+    case.write_text(TABLES)
+    assert main(["run", str(case), "--out", str(results), "--quiet"]) == 0
+    names = sorted(path.name for path in results.iterdir())
+    assert names == ["history.csv", "results.pvd", "step_0001.vtu", "summary.json"], names

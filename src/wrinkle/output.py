@@ -61,6 +61,13 @@ __all__ = [
 
 SUMMARY = "summary.json"
 HISTORY = "history.csv"
+# the pictures `wrinkle plot` draws into a results folder (wrinkle.plot), removed with the old
+# steps when a new run starts there
+STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE = (
+    "state.png",
+    "principal_stress.png",
+    "load_displacement.png",
+)
 COLLECTION = "results.pvd"
 STEP_FILE = re.compile(r"step_\d{4,}\.vtu")
 
@@ -107,9 +114,9 @@ class ResultWriter:
     the model came from, recorded in summary.json. Supports are ``model.supports`` (objects
     with ``label`` and ``dofs``), read when the writer is made; each one's reaction sums only
     the components it holds, and supports with the same label are reported as one (summed
-    over the union of their components). Creates
-    ``out_dir``; removes step_NNNN.vtu files of an earlier run there. Raises ValueError for a
-    probe with no nodes or with nodes outside the mesh.
+    over the union of their components). Creates ``out_dir``; removes the step_NNNN.vtu
+    files and pictures of an earlier run there. Raises ValueError for a probe with no nodes or
+    with nodes outside the mesh.
     """
 
     def __init__(
@@ -141,8 +148,9 @@ class ResultWriter:
         self.steps: list[dict] = []
         self.rows: list[list] = []
         self.out_dir.mkdir(parents=True, exist_ok=True)
+        pictures = {STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE}
         for old in self.out_dir.iterdir():
-            if STEP_FILE.fullmatch(old.name):
+            if STEP_FILE.fullmatch(old.name) or old.name in pictures:
                 old.unlink()
         self._write_collection()
         self._write_history()

@@ -146,7 +146,7 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
     Returns the paths of the three files. Raises ValueError if no step has been written.
     """
     from wrinkle.mesh import meshio_read, require_meshio
-    from wrinkle.output import HISTORY, SUMMARY
+    from wrinkle.output import CURVE_PICTURE, HISTORY, STATE_PICTURE, STRESS_PICTURE, SUMMARY
 
     require_meshio()
     out_dir = Path(out_dir)
@@ -174,12 +174,10 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
         where += " (" + _stop_note(summary["message"]) + ")"
     where += f"\ndeformed membrane {view.name}"
     paths = [
-        _plot_states(view, cell, where, out_dir / "state.png"),
-        _plot_major_stress(
-            view, cell, where, _unit(units, "stress"), out_dir / "principal_stress.png"
-        ),
+        _plot_states(view, cell, where, out_dir / STATE_PICTURE),
+        _plot_major_stress(view, cell, where, _unit(units, "stress"), out_dir / STRESS_PICTURE),
         _plot_load_displacement(
-            summary, out_dir / HISTORY, _unit(units, "length"), out_dir / "load_displacement.png"
+            summary, out_dir / HISTORY, _unit(units, "length"), out_dir / CURVE_PICTURE
         ),
     ]
     if damaged:
