@@ -290,9 +290,10 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
 
     base, times, units = _read_mesh(reader, data["mesh"], path.parent)
     if base.n_elements * 4**times > MAX_REFINED_ELEMENTS:
+        count = float(base.n_elements) * 4.0 ** min(times, 400)  # formattable however large
         reader.fail(
             "[mesh]",
-            f"'refine' = {times} would make {base.n_elements * 4**times:,} elements "
+            f"'refine' = {times} would make {count:.3g} elements "
             f"(at most {MAX_REFINED_ELEMENTS:,})",
         )
     try:

@@ -194,6 +194,12 @@ def material_response(material: Material | Wrinkling, F: ArrayLike) -> PointResp
         raise ValueError(f"material_response: F must be shaped (2, 2) or (3, 2), got {F.shape}")
     if not np.all(np.isfinite(F)):
         raise ValueError("material_response: F must be finite")
+    with np.errstate(all="ignore"):  # extreme F: every number is checked below instead
+        return _material_response(material, F)
+
+
+def _material_response(material: Material | Wrinkling, F: np.ndarray) -> PointResponse:
+    """``material_response`` of a checked F, (2, 2) or (3, 2)."""
     C = (F.T @ F)[None]
     # singular to round-off: det C at most 1e-14 (tr C)^2 (a stretch ratio below about 1e-7)
     if not np.linalg.det(C[0]) > SINGULAR_RATIO * np.trace(C[0]) ** 2:

@@ -94,7 +94,8 @@ def refined(mesh: Mesh, times: int) -> Mesh:
     if mesh.n_elements * 4**times > MAX_REFINED_ELEMENTS:
         raise ValueError(
             f"refining {mesh.n_elements:,} elements {times} times would make "
-            f"{mesh.n_elements * 4**times:,} elements (at most {MAX_REFINED_ELEMENTS:,})"
+            f"{float(mesh.n_elements) * 4.0 ** min(times, 400):.3g} elements "
+            f"(at most {MAX_REFINED_ELEMENTS:,})"
         )
     for _ in range(times):
         mesh = refine(mesh).mesh
