@@ -349,3 +349,37 @@ def test_a_new_run_leaves_nothing_of_an_old_one(results, capsys):
     assert main(["run", str(case), "--out", str(results), "--quiet"]) == 0
     names = sorted(path.name for path in results.iterdir())
     assert names == ["history.csv", "results.pvd", "step_0001.vtu", "summary.json"], names
+
+
+def test_a_full_disk_mid_run_ends_with_one_line_and_status_1(tmp_path, capsys, monkeypatch):
+    """The third step cannot be written (no space left on the device): exit status 1, one line
+    naming the file, the two steps before it intact and readable."""
+    import errno
+    import os
+
+    import wrinkle.output
+
+    path = tmp_path / "case.toml"
+    path.write_text(TABLES + "\n[solver]\nsteps = 4\n")
+    if not os.path.exists("/proc/self"):
+        pytest.skip("needs /proc to name the file being written")
+    real_fsync = os.fsync
+
+    def fsync(descriptor):
+        if "step_0003.vtu" in os.readlink(f"/proc/self/fd/{descriptor}"):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real_fsync(descriptor)
+
+    monkeypatch.setattr(wrinkle.output.os, "fsync", fsync)
+    out = tmp_path / "out"
+    status = main(["run", str(path), "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err
+    assert status == 1
+    assert err.count("\n") == 1 and "cannot write" in err and "step_0003.vtu" in err, err
+    assert "No space left on device" in err
+    steps = sorted(p.name for p in out.glob("step_*.vtu"))
+    assert steps == ["step_0001.vtu", "step_0002.vtu"]
+    assert not list(out.glob(".*.tmp"))
+    from wrinkle.mesh import read_mesh
+
+    assert read_mesh(out / "step_0002.vtu").n_elements == 8

@@ -9,6 +9,7 @@ holds the ``Model``, the solver settings, the probes and the units; ``Case.solve
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import tomllib
@@ -23,7 +24,7 @@ from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh, annulus, check_fits, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
-from wrinkle.output import ResultWriter
+from wrinkle.output import ResultsWriteError, ResultWriter
 from wrinkle.refinement import MAX_REFINED_ELEMENTS, refine
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import evaluate_expression, select_nodes
@@ -264,6 +265,10 @@ class Case:
             raise
         except KeyboardInterrupt:
             writer.finish(False, "interrupted")
+            raise
+        except ResultsWriteError as error:
+            with contextlib.suppress(OSError):  # the summary may not be writable either
+                writer.finish(False, f"stopped: {error}")
             raise
         writer.finish(True, "converged to load factor 1")
         return results

@@ -5,7 +5,8 @@
 (``wrinkle.case.Case.run``); ``plot`` draws the pictures of such a directory
 (``wrinkle.plot.plot_results``); ``-v`` before the command logs every iteration.
 
-Exit status: 0 done; 1 a load step did not converge (every converged step is on disk);
+Exit status: 0 done; 1 a load step did not converge, or a results file could not be written
+(every converged step written before is on disk);
 2 bad input (a one-line message naming the file, key, node or element, or a missing optional
 dependency); 130 interrupted.
 
@@ -31,6 +32,7 @@ __all__ = ["main"]
 
 def _run(args: argparse.Namespace) -> int:
     from wrinkle.case import read_case
+    from wrinkle.output import ResultsWriteError
     from wrinkle.progress import Progress
 
     case = read_case(args.case)
@@ -49,6 +51,13 @@ def _run(args: argparse.Namespace) -> int:
         progress.close()
         print(f"wrinkle: interrupted; the converged steps are in {args.out}", file=sys.stderr)
         return 130
+    except ResultsWriteError as error:
+        progress.close()
+        print(
+            f"wrinkle: {args.case}: {error}; the steps written before it are in {args.out}",
+            file=sys.stderr,
+        )
+        return 1
     if not args.quiet:
         print(f"wrote {args.out}/results.pvd, summary.json, history.csv")
     return 0

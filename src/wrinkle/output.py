@@ -77,23 +77,35 @@ def step_file_name(index: int) -> str:
     return f"step_{index:04d}.vtu"
 
 
+class ResultsWriteError(OSError):
+    """A results file could not be written (a full disk, a folder made read-only): the
+    message names the file and the reason; the files written before it are intact."""
+
+
 def atomic_write(path: Path, write: Callable[[Path], None]) -> None:
     """Call ``write(temporary_path)`` on a temporary file next to ``path``, flush it to disk
     and move it onto ``path`` with os.replace: readers see the old file or the whole new one.
-    The temporary file is removed if ``write`` fails or is interrupted."""
+    The temporary file is removed if ``write`` fails or is interrupted; an OSError becomes a
+    ResultsWriteError naming ``path``."""
     path = Path(path)
-    while True:  # mode "x": a new file with the usual permissions (not mkstemp's 0600)
-        temporary = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
-        try:
-            open(temporary, "x").close()
-            break
-        except FileExistsError:  # pragma: no cover - 32 random bits collided
-            continue
+    try:
+        while True:  # mode "x": a new file with the usual permissions (not mkstemp's 0600)
+            temporary = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
+            try:
+                open(temporary, "x").close()
+                break
+            except FileExistsError:  # pragma: no cover - 32 random bits collided
+                continue
+    except OSError as error:
+        raise ResultsWriteError(f"cannot write {path}: {error.strerror or error}") from None
     try:
         write(temporary)
         with open(temporary, "rb+") as handle:
             os.fsync(handle.fileno())
         os.replace(temporary, path)
+    except OSError as error:
+        temporary.unlink(missing_ok=True)
+        raise ResultsWriteError(f"cannot write {path}: {error.strerror or error}") from None
     except BaseException:
         temporary.unlink(missing_ok=True)
         raise
