@@ -383,3 +383,226 @@ def test_a_full_disk_mid_run_ends_with_one_line_and_status_1(tmp_path, capsys, m
     from wrinkle.mesh import read_mesh
 
     assert read_mesh(out / "step_0002.vtu").n_elements == 8
+
+
+R = "rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}"
+MAT = 'model = "svk"\nE = 1000.0\nnu = 0.3\nthickness = 0.01'
+FIRST = 'nodes = "y == 0"\nfix = ["x", "y", "z"]'
+SECOND = 'nodes = "y == 1"\ndisplacement = [0.0, 0.1, 0.0]'
+BAD_ANNULUS = (
+    "annulus = {inner_radius = 2.0, outer_radius = 1.0, n_radial = 2, n_circumferential = 8}"
+)
+BAD_CYLINDER = (
+    "cylinder = {radius = 1.0, length = 2.0, n_circumferential = 8, n_axial = 2, n_cap = 0}"
+)
+NO_E_T = (
+    'model = "svk-transverse"\nE_L = 5.0\nnu_LT = 0.3\nnu_TT = 0.3\nG_LT = 0.4\nthickness = 0.01'
+)
+# each key of each table, given a wrong type or a value outside its meaning; the fragment
+# is what the line must say (the key, and the table the reader names)
+MORE = [
+    # [mesh]
+    (
+        "mesh not a table",
+        chain(drop("[mesh]", "[material]"), top("mesh = 3")),
+        "[mesh]: must be a table",
+    ),
+    ("two mesh sources", replace(R, R + '\nfile = "a.msh"'), "give exactly one of 'file'"),
+    ("no mesh source", replace(R, ""), "give exactly one of 'file'"),
+    ("mesh file missing", replace(R, 'file = "nowhere.msh"'), "nowhere.msh"),
+    ("width 0", replace("width = 1.0", "width = 0.0"), "width"),
+    ("width text", replace("width = 1.0", 'width = "one"'), "width"),
+    ("nx 0", replace("nx = 2", "nx = 0"), "nx"),
+    ("nx float", replace("nx = 2", "nx = 2.5"), "nx"),
+    ("rectangle unknown key", replace("ny = 2}", "ny = 2, nz = 3}"), "nz"),
+    ("diagonal bad", replace("ny = 2}", 'ny = 2, diagonal = "up"}'), "diagonal"),
+    (
+        "disk radius negative",
+        replace(R, "disk = {radius = -1.0, n_radial = 2, n_circumferential = 8}"),
+        "radius",
+    ),
+    (
+        "disk n_circumferential 2",
+        replace(R, "disk = {radius = 1.0, n_radial = 2, n_circumferential = 2}"),
+        "n_circumferential",
+    ),
+    (
+        "annulus inner > outer",
+        replace(
+            R,
+            BAD_ANNULUS,
+        ),
+        "annulus",
+    ),
+    ("sphere n 0", replace(R, "sphere = {radius = 1.0, n = 0}"), "'n' must be > 0"),
+    (
+        "cylinder n_cap 0",
+        replace(
+            R,
+            BAD_CYLINDER,
+        ),
+        "n_cap",
+    ),
+    ("refine negative", replace(R, R + "\nrefine = -1"), "'refine'"),
+    ("refine float", replace(R, R + "\nrefine = 1.5"), "'refine'"),
+    ("units a number", replace(R, R + "\nunits = 3"), "'units' must be a string or a table"),
+    # [material]
+    (
+        "material not a table",
+        chain(drop("[material]", "[[support]]"), top("material = 3")),
+        "[[material]]",
+    ),
+    ("model missing", replace('model = "svk"\n', ""), "model"),
+    ("model number", replace('model = "svk"', "model = 3"), "model"),
+    ("E missing", replace("E = 1000.0\n", ""), "'E'"),
+    ("E zero", replace("E = 1000.0", "E = 0.0"), "E"),
+    ("E negative", replace("E = 1000.0", "E = -5.0"), "E"),
+    ("E text", replace("E = 1000.0", 'E = "stiff"'), "'E'"),
+    ("E boolean", replace("E = 1000.0", "E = true"), "'E'"),
+    ("nu 0.5", replace("nu = 0.3", "nu = 0.5"), "nu"),
+    ("nu -1.2", replace("nu = 0.3", "nu = -1.2"), "nu"),
+    ("thickness 0", replace("thickness = 0.01", "thickness = 0.0"), "thickness"),
+    ("thickness negative", replace("thickness = 0.01", "thickness = -0.01"), "thickness"),
+    ("thickness missing", replace("thickness = 0.01\n", ""), "thickness"),
+    ("material unknown key", replace("nu = 0.3", "nu = 0.3\ncolour = 1"), "colour"),
+    ("neo-hookean without mu", replace(MAT, 'model = "neo-hookean"\nthickness = 0.01'), "mu"),
+    (
+        "neo-hookean mu negative",
+        replace(MAT, 'model = "neo-hookean"\nmu = -1.0\nthickness = 0.01'),
+        "mu",
+    ),
+    (
+        "transverse without E_T",
+        replace(
+            MAT,
+            NO_E_T,
+        ),
+        "E_T",
+    ),
+    ("direction two numbers", replace("nu = 0.3", "nu = 0.3\ndirection = [1.0, 0.0]"), "direction"),
+    ("direction zero", replace("nu = 0.3", "nu = 0.3\ndirection = [0.0, 0.0, 0.0]"), "direction"),
+    ("direction unknown field", replace("nu = 0.3", 'nu = 0.3\ndirection = "fibres"'), "fibres"),
+    ("bending text", replace("nu = 0.3", 'nu = 0.3\nbending = "yes"'), "bending"),
+    ("bending negative", replace("nu = 0.3", "nu = 0.3\nbending = -1.0"), "bending"),
+    ("region unknown", replace("nu = 0.3", 'nu = 0.3\nregion = "skin"'), "skin"),
+    # [[support]]
+    ("support without nodes", replace(FIRST, 'fix = ["x", "y", "z"]'), "nodes"),
+    ("support without fix or displacement", replace(FIRST, 'nodes = "y == 0"'), "[[support]] 1"),
+    ("fix unknown component", replace('fix = ["x", "y", "z"]', 'fix = ["x", "w"]'), "w"),
+    ("fix a string", replace('fix = ["x", "y", "z"]', 'fix = "x"'), "fix"),
+    (
+        "displacement two values",
+        replace("displacement = [0.0, 0.1, 0.0]", "displacement = [0.0, 0.1]"),
+        "displacement",
+    ),
+    (
+        "displacement a number",
+        replace("displacement = [0.0, 0.1, 0.0]", "displacement = 0.1"),
+        "displacement",
+    ),
+    (
+        "displacement bad expression",
+        replace("displacement = [0.0, 0.1, 0.0]", 'displacement = [0.0, "0.1 * q", 0.0]'),
+        "q",
+    ),
+    (
+        "displacement expression syntax",
+        replace("displacement = [0.0, 0.1, 0.0]", 'displacement = [0.0, "0.1 *", 0.0]'),
+        "expression",
+    ),
+    (
+        "displacement boolean component",
+        replace("displacement = [0.0, 0.1, 0.0]", "displacement = [0.0, true, 0.0]"),
+        "displacement",
+    ),
+    ("support unknown key", replace(FIRST, FIRST + "\nspring = 1.0"), "spring"),
+    ("selector syntax", replace('nodes = "y == 0"', 'nodes = "y == "'), "selector"),
+    ("selector unknown name", replace('nodes = "y == 0"', 'nodes = "q == 0"'), "unknown name 'q'"),
+    ("selector a number", replace('nodes = "y == 0"', 'nodes = "1.0"'), "not a condition"),
+    ("selector not a string", replace('nodes = "y == 0"', "nodes = 3"), "nodes"),
+    ("selector NaN", replace('nodes = "y == 0"', 'nodes = "sqrt(x - 2) == 0"'), "NaN"),
+    ("support label number", replace(FIRST, FIRST + "\nlabel = 3"), "label"),
+    # [[load]]
+    ("load without kind", append("[[load]]\nvalue = 1.0"), "kind"),
+    ("load unknown kind", append('[[load]]\nkind = "wind"\nvalue = 1.0'), "wind"),
+    ("pressure without value", append('[[load]]\nkind = "pressure"'), "value"),
+    ("pressure text value", append('[[load]]\nkind = "pressure"\nvalue = "high"'), "value"),
+    (
+        "pressure unknown key",
+        append('[[load]]\nkind = "pressure"\nvalue = 1.0\nfollow = true'),
+        "follow",
+    ),
+    (
+        "pressure unknown region",
+        append('[[load]]\nkind = "pressure"\nvalue = 1.0\nregion = "top"'),
+        "region",
+    ),
+    ("edge without traction", append('[[load]]\nkind = "edge"\nnodes = "y == 1"'), "[[load]] 1"),
+    (
+        "edge traction two values",
+        append('[[load]]\nkind = "edge"\nnodes = "y == 1"\ntraction = [1.0, 0.0]'),
+        "traction",
+    ),
+    (
+        "edge follow on traction",
+        append(
+            '[[load]]\nkind = "edge"\nnodes = "y == 1"\ntraction = [1.0, 0.0, 0.0]\nfollow = true'
+        ),
+        "follow",
+    ),
+    (
+        "edge on interior nodes",
+        append('[[load]]\nkind = "edge"\nnodes = "y == 0.5"\nnormal = 1.0'),
+        "[[load]] 1",
+    ),
+    (
+        "nodal force wrong length",
+        append('[[load]]\nkind = "force"\nnodes = "y == 1"\nforce = [1.0]'),
+        "force",
+    ),
+    (
+        "gravity without density",
+        append('[[load]]\nkind = "gravity"\nacceleration = [0.0, 0.0, -9.81]'),
+        "density",
+    ),
+    (
+        "gravity density negative",
+        append('[[load]]\nkind = "gravity"\nacceleration = [0.0, 0.0, -9.81]\ndensity = -1.0'),
+        "density",
+    ),
+    # [[probe]]
+    ("probe without nodes", append('[[probe]]\nname = "a"'), "nodes"),
+    ("probe unknown key", append('[[probe]]\nnodes = "y == 1"\ncolour = 1'), "colour"),
+    ("probe name a number", append('[[probe]]\nname = 3\nnodes = "y == 1"'), "name"),
+    ("probe matches no node", append('[[probe]]\nnodes = "y == 7"'), "matches no node"),
+    # [solver]
+    ("solver not a table", top("solver = 3"), "[solver]: must be a table"),
+    ("method unknown", append('[solver]\nmethod = "lbfgs"'), "lbfgs"),
+    ("method a number", append("[solver]\nmethod = 1"), "method"),
+    ("linear_solver unknown", append('[solver]\nlinear_solver = "mumps"'), "mumps"),
+    ("steps 0", append("[solver]\nsteps = 0"), "steps"),
+    ("steps float", append("[solver]\nsteps = 2.5"), "steps"),
+    ("max_iterations 0", append("[solver]\nmax_iterations = 0"), "max_iterations"),
+    ("tolerance 0", append("[solver]\ntolerance = 0.0"), "tolerance"),
+    ("tolerance text", append('[solver]\ntolerance = "tight"'), "tolerance"),
+    ("cutback 1", append("[solver]\ncutback = 1.0"), "cutback"),
+    ("growth 0.5", append("[solver]\ngrowth = 0.5"), "growth"),
+    ("max_step 2", append("[solver]\nmax_step = 2.0"), "max_step"),
+    ("max_step below min_step", append("[solver]\nmin_step = 0.5\nmax_step = 0.1"), "max_step"),
+    ("target_iterations negative", append("[solver]\ntarget_iterations = -1"), "target_iterations"),
+    ("nested without refine", append("[solver]\nnested = true"), "nested"),
+    ("nested text", append('[solver]\nnested = "yes"'), "nested"),
+    # top level
+    ("title a number", top("title = 3"), "title"),
+    ("verification a number", top("verification = 3"), "[verification]"),
+]
+
+
+@pytest.mark.parametrize("name, edit, fragment", MORE, ids=[row[0] for row in MORE])
+def test_every_key_refuses_its_bad_values(tmp_path, capsys, name, edit, fragment):
+    test_bad_input_exits_2_with_one_line(tmp_path, capsys, name, edit, fragment)
+
+
+def test_the_table_is_long_enough():
+    """Issue 19 asks for at least 100 bad inputs in one table."""
+    assert len(BAD) + len(MORE) >= 100
