@@ -12,6 +12,28 @@ from wrinkle.materials import Material, NeoHookean, StVenantKirchhoff
 REFERENCE_THICKNESS = 0.1
 
 
+# a unit square on a 2 x 2 mesh, its bottom edge held and its top edge moved: the base that
+# the case-file tests edit into bad inputs (test_cli, test_bad_input, test_properties)
+SQUARE_CASE = """
+[mesh]
+rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}
+
+[material]
+model = "svk"
+E = 1000.0
+nu = 0.3
+thickness = 0.01
+
+[[support]]
+nodes = "y == 0"
+fix = ["x", "y", "z"]
+
+[[support]]
+nodes = "y == 1"
+displacement = [0.05, 0.02, 0.0]
+"""
+
+
 def random_spd_stiffness(seed: int = 5) -> np.ndarray:
     """A general 6x6 SPD stiffness H = A A^T + 2 I, A standard normal: it couples every
     in-plane and out-of-plane component (no material symmetry at all)."""

@@ -3,31 +3,18 @@ one line on stderr that names the culprit, nothing on stdout, no traceback and n
 The reference of each row is its own input: the key, table, node or file it must name."""
 
 import pytest
+from conftest import SQUARE_CASE
 
 from wrinkle.cli import main
 
-TABLES = """
-[mesh]
-rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}
-
-[material]
-model = "svk"
-E = 1000.0
-nu = 0.3
-thickness = 0.01
-
-[[support]]
-nodes = "y == 0"
-fix = ["x", "y", "z"]
-
-[[support]]
-nodes = "y == 1"
-displacement = [0.0, 0.1, 0.0]
-
+TABLES = (
+    SQUARE_CASE
+    + """
 [[support]]
 nodes = "z == 0"
 fix = ["z"]
 """
+)
 
 
 def replace(old, new):
@@ -120,7 +107,7 @@ BAD = [
     ),
     (
         "inf displacement",
-        replace("displacement = [0.0, 0.1, 0.0]", "displacement = [0.0, inf, 0.0]"),
+        replace("displacement = [0.05, 0.02, 0.0]", "displacement = [0.0, inf, 0.0]"),
         "'displacement' must be finite",
     ),
     ("inf E", replace("E = 1000.0", "E = inf"), "'E' must be finite"),
@@ -156,19 +143,19 @@ BAD = [
     ("thickness 1e-320", replace("thickness = 0.01", "thickness = 1e-320"), "stiffness"),
     (
         "displacement 1e200",
-        replace("displacement = [0.0, 0.1, 0.0]", "displacement = [0.0, 1e200, 0.0]"),
+        replace("displacement = [0.05, 0.02, 0.0]", "displacement = [0.0, 1e200, 0.0]"),
         "a prescribed displacement of 1e+200",
     ),
     (
         "displacement 1e-13",
-        replace("displacement = [0.0, 0.1, 0.0]", "displacement = [0.0, 1e-13, 0.0]"),
+        replace("displacement = [0.05, 0.02, 0.0]", "displacement = [0.0, 1e-13, 0.0]"),
         "the loads are too small for the sheet's stiffness",
     ),
     (
         "pressure 1e300",
         chain(
             replace(
-                'nodes = "y == 1"\ndisplacement = [0.0, 0.1, 0.0]',
+                'nodes = "y == 1"\ndisplacement = [0.05, 0.02, 0.0]',
                 'nodes = "y == 1"\nfix = ["x", "y", "z"]',
             ),
             append('[[load]]\nkind = "pressure"\nvalue = 1e300'),
@@ -196,7 +183,7 @@ BAD = [
     (
         "long expression",
         replace(
-            "displacement = [0.0, 0.1, 0.0]",
+            "displacement = [0.05, 0.02, 0.0]",
             'displacement = [0.0, "' + "+".join(["0.0001 * x"] * 1500) + '", 0.0]',
         ),
         "chains too many operators",
@@ -388,7 +375,7 @@ def test_a_full_disk_mid_run_ends_with_one_line_and_status_1(tmp_path, capsys, m
 R = "rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}"
 MAT = 'model = "svk"\nE = 1000.0\nnu = 0.3\nthickness = 0.01'
 FIRST = 'nodes = "y == 0"\nfix = ["x", "y", "z"]'
-SECOND = 'nodes = "y == 1"\ndisplacement = [0.0, 0.1, 0.0]'
+SECOND = 'nodes = "y == 1"\ndisplacement = [0.05, 0.02, 0.0]'
 BAD_ANNULUS = (
     "annulus = {inner_radius = 2.0, outer_radius = 1.0, n_radial = 2, n_circumferential = 8}"
 )
@@ -482,6 +469,11 @@ MORE = [
     ("direction two numbers", replace("nu = 0.3", "nu = 0.3\ndirection = [1.0, 0.0]"), "direction"),
     ("direction zero", replace("nu = 0.3", "nu = 0.3\ndirection = [0.0, 0.0, 0.0]"), "direction"),
     ("direction unknown field", replace("nu = 0.3", 'nu = 0.3\ndirection = "fibres"'), "fibres"),
+    (
+        "direction nan",
+        replace("nu = 0.3", "nu = 0.3\ndirection = [nan, 0.0, 0.0]"),
+        "'direction' must be finite",
+    ),
     ("bending text", replace("nu = 0.3", 'nu = 0.3\nbending = "yes"'), "bending"),
     ("bending negative", replace("nu = 0.3", "nu = 0.3\nbending = -1.0"), "bending"),
     ("region unknown", replace("nu = 0.3", 'nu = 0.3\nregion = "skin"'), "skin"),
@@ -492,27 +484,27 @@ MORE = [
     ("fix a string", replace('fix = ["x", "y", "z"]', 'fix = "x"'), "fix"),
     (
         "displacement two values",
-        replace("displacement = [0.0, 0.1, 0.0]", "displacement = [0.0, 0.1]"),
+        replace("displacement = [0.05, 0.02, 0.0]", "displacement = [0.0, 0.1]"),
         "displacement",
     ),
     (
         "displacement a number",
-        replace("displacement = [0.0, 0.1, 0.0]", "displacement = 0.1"),
+        replace("displacement = [0.05, 0.02, 0.0]", "displacement = 0.1"),
         "displacement",
     ),
     (
         "displacement bad expression",
-        replace("displacement = [0.0, 0.1, 0.0]", 'displacement = [0.0, "0.1 * q", 0.0]'),
+        replace("displacement = [0.05, 0.02, 0.0]", 'displacement = [0.0, "0.1 * q", 0.0]'),
         "q",
     ),
     (
         "displacement expression syntax",
-        replace("displacement = [0.0, 0.1, 0.0]", 'displacement = [0.0, "0.1 *", 0.0]'),
+        replace("displacement = [0.05, 0.02, 0.0]", 'displacement = [0.0, "0.1 *", 0.0]'),
         "expression",
     ),
     (
         "displacement boolean component",
-        replace("displacement = [0.0, 0.1, 0.0]", "displacement = [0.0, true, 0.0]"),
+        replace("displacement = [0.05, 0.02, 0.0]", "displacement = [0.0, true, 0.0]"),
         "displacement",
     ),
     ("support unknown key", replace(FIRST, FIRST + "\nspring = 1.0"), "spring"),

@@ -11,6 +11,7 @@ from pathlib import Path
 import meshio
 import numpy as np
 import pytest
+from conftest import SQUARE_CASE
 
 from verification.paper_test import paper_material
 from verification.references.relaxed_energy import relax
@@ -87,24 +88,7 @@ def test_tissue_example(tmp_path):
     assert 3 < median < 27 or 153 < median < 177, median
 
 
-BASE_CASE = """
-[mesh]
-rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}
-
-[material]
-model = "svk"
-E = 1000.0
-nu = 0.3
-thickness = 0.01
-
-[[support]]
-nodes = "y == 0"
-fix = ["x", "y", "z"]
-
-[[support]]
-nodes = "y == 1"
-displacement = [0.05, 0.02, 0.0]
-"""
+BASE_CASE = SQUARE_CASE
 
 TRIANGLE_VTU = "triangles.vtu"
 

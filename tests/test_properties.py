@@ -6,7 +6,7 @@ stress at all."""
 
 import numpy as np
 import pytest
-from conftest import material_cases
+from conftest import SQUARE_CASE, material_cases
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -39,7 +39,7 @@ gradients = st.lists(entries, min_size=4, max_size=4).map(lambda v: np.reshape(v
 def test_material_response_is_a_valid_result_or_a_value_error(case):
     wrinkling = Wrinkling(case.material)
 
-    @fixed(1500)
+    @fixed(2000)
     @given(gradients)
     def check(F):
         try:
@@ -90,24 +90,7 @@ def test_selectors_give_nodes_or_a_value_error(text):
     assert nodes.size and np.all((nodes >= 0) & (nodes < MESH.n_nodes))
 
 
-CASE = """
-[mesh]
-rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}
-
-[material]
-model = "svk"
-E = 1000.0
-nu = 0.3
-thickness = 0.01
-
-[[support]]
-nodes = "y == 0"
-fix = ["x", "y", "z"]
-
-[[support]]
-nodes = "y == 1"
-displacement = [0.0, 0.1, 0.0]
-"""
+CASE = SQUARE_CASE
 
 values = st.recursive(
     st.one_of(
@@ -149,7 +132,7 @@ def case_path(tmp_path_factory):
 
 
 def test_the_case_reader_reads_or_names_the_fault(case_path):
-    @fixed(1500)
+    @fixed(2000)
     @given(overrides)
     def check(changes):
         try:
