@@ -291,30 +291,27 @@ class DiscreteSystem:
         return float(np.sqrt(squares))
 
     def _stiffness_laplacian(self) -> sp.csr_matrix:
-        """L of ``motion_force``: (n_nodes, n_nodes), N/m."""
-        triangles = self.mesh.triangles
-        g = self.geometry
-        weight = np.zeros(self.mesh.n_elements)
+        """L of ``motion_force``, (n_nodes, n_nodes), N/m: the step metric under each
+        element's reference stiffness as its tension, one displacement component of it (the
+        three are alike and uncoupled)."""
+        tension = np.zeros(self.mesh.n_elements)
         for indices, elements in self.groups:
-            weight[indices] = elements.material.reference_stiffness
-        G = g.shape_gradient  # (n_elements, 3, 2)
-        blocks = (weight * g.area)[:, None, None] * np.einsum("eak,ebk->eab", G, G)
-        rows = np.repeat(triangles, 3, axis=1).ravel()
-        columns = np.tile(triangles, (1, 3)).ravel()
-        n = self.mesh.n_nodes
-        return sp.csr_matrix((blocks.ravel(), (rows, columns)), shape=(n, n))
+            tension[indices] = elements.material.reference_stiffness
+        return self.pattern.matrix(self.step_metric(tension))[0::3, 0::3].tocsr()
 
-    def step_metric(self) -> np.ndarray:
+    def step_metric(self, tension: np.ndarray | None = None) -> np.ndarray:
         """CSR data, on ``pattern``, of the unit-tension stiffness (``unit_tension_stiffness``
-        assembled: a Laplacian on each displacement component), (nnz,)."""
+        assembled: a Laplacian on each displacement component), (nnz,); with ``tension``
+        (n_elements,), of each element's isotropic tension of that size instead of 1."""
         g = self.geometry
+        area = g.area if tension is None else g.area * tension
         data = np.zeros(self.pattern.nnz)
         for start in range(0, g.n_elements, KERNEL_BLOCK):
             block = slice(start, min(start + KERNEL_BLOCK, g.n_elements))
             self.pattern.add_to_data(
                 data,
                 block,
-                unit_tension_stiffness(g.area[block], g.shape_gradient[block]),
+                unit_tension_stiffness(area[block], g.shape_gradient[block]),
                 compiled=self.compiled,
             )
         return data

@@ -221,7 +221,7 @@ class Wrinkling:
                     rows = np.flatnonzero(loose)
                     phi_r, b_r = phi_w[rows], b_w[rows]
                     Cr = Cw[rows]
-                    e_rows = (0.5 * (Cr[:, 0, 0] - 1.0), 0.5 * (Cr[:, 1, 1] - 1.0), Cr[:, 0, 1])
+                    e_rows = _voigt_strain(Cr)
                     tangent_r = (
                         tangent_of(self.material.response(Cr, tangent=True))
                         if plain_tangent_w is None
@@ -366,7 +366,7 @@ class Wrinkling:
         plain_stress (m, 2, 2) and plain_tangent (m, 3, 3) are the plain law at C; the tangent
         is evaluated here if not given.
         """
-        e = (0.5 * (C[:, 0, 0] - 1.0), 0.5 * (C[:, 1, 1] - 1.0), C[:, 0, 1])
+        e = _voigt_strain(C)
         if plain_tangent is None:
             plain_tangent = tangent_of(self.material.response(C, tangent=True))
         # |g| can be no smaller than round-off in E = (C - I)/2 times the stiffness
@@ -568,6 +568,11 @@ class Wrinkling:
                 if j != i:
                     tangent[:, j, i] = value
         return tangent
+
+
+def _voigt_strain(C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Voigt components (E11, E22, 2 E12) of E = (C - I)/2, each (m,); C (m, 2, 2)."""
+    return 0.5 * (C[:, 0, 0] - 1.0), 0.5 * (C[:, 1, 1] - 1.0), C[:, 0, 1]
 
 
 def _directional_derivatives(m0, m1, m2, stress, D):
