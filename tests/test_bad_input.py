@@ -584,6 +584,12 @@ MORE = [
     ("target_iterations negative", append("[solver]\ntarget_iterations = -1"), "target_iterations"),
     ("nested without refine", append("[solver]\nnested = true"), "nested"),
     ("nested text", append('[solver]\nnested = "yes"'), "nested"),
+    ("convergence unknown", append('[solver]\nconvergence = "energy"'), "unknown convergence"),
+    ("convergence a number", append("[solver]\nconvergence = 1"), "convergence"),
+    ("accuracy without nested", append('[solver]\nconvergence = "accuracy"'), "nested = true"),
+    ("accuracy_energy 2", append("[solver]\naccuracy_energy = 2.0"), "accuracy_energy"),
+    ("accuracy_change 0.5", append("[solver]\naccuracy_change = 0.5"), "accuracy_change"),
+    ("accuracy_change 0", append("[solver]\naccuracy_change = 0.0"), "accuracy_change"),
     # top level
     ("title a number", top("title = 3"), "title"),
     ("verification a number", top("verification = 3"), "[verification]"),

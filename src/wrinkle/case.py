@@ -29,6 +29,7 @@ from wrinkle.refinement import MAX_REFINED_ELEMENTS, refine
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import evaluate_expression, select_nodes
 from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS, ConvergenceError, SolverSettings
+from wrinkle.solvers.settings import CONVERGENCE_TESTS
 
 __all__ = [
     "GENERATORS",
@@ -78,6 +79,9 @@ SOLVER_KEYS = {
     "linear_solver",
     "look_ahead",
     "nested",
+    "convergence",
+    "accuracy_energy",
+    "accuracy_change",
 }
 
 
@@ -227,7 +231,11 @@ class Case:
         Raises ConvergenceError (its ``results`` labelled the same) if a step fails."""
         try:
             results = self.model.solve(
-                self.settings, on_step=on_step, coarse=self.coarse or None, **options
+                self.settings,
+                on_step=on_step,
+                coarse=self.coarse or None,
+                probes=self.probes,
+                **options,
             )
         except ConvergenceError as error:
             self._label(error.results)
@@ -580,9 +588,24 @@ def _read_solver(reader: _Reader, table: dict) -> SolverSettings:
         solver["target_iterations"] = reader.number(
             table, "target_iterations", where, integer=True, minimum=0
         )
-    for key in ("tolerance", "min_step", "max_step", "cutback", "growth"):
+    for key in (
+        "tolerance",
+        "min_step",
+        "max_step",
+        "cutback",
+        "growth",
+        "accuracy_energy",
+        "accuracy_change",
+    ):
         if key in table:
             solver[key] = float(reader.number(table, key, where, positive=True))
+    if "convergence" in table:
+        test = reader.string(table, "convergence", where)
+        if test not in CONVERGENCE_TESTS:
+            reader.fail(
+                where, f"unknown convergence '{test}' (one of {', '.join(CONVERGENCE_TESTS)})"
+            )
+        solver["convergence"] = test
     for key in ("look_ahead", "nested"):
         if key in table:
             if not isinstance(table[key], bool):

@@ -16,7 +16,7 @@ Nodes are given as indices, a boolean mask, a node-set name or a selector such a
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -475,6 +475,7 @@ class Model:
         u0: np.ndarray | None = None,
         on_step: Callable[[StepResult], None] | None = None,
         coarse: Sequence[Model] | None = None,
+        probes: Mapping[str, np.ndarray] | None = None,
         **options: Any,
     ) -> Results:
         """Proportional stepping of loads and prescribed displacements from 0 to 1.
@@ -489,7 +490,9 @@ class Model:
         ``on_step(step_result)`` is called after each converged step. coarse: models of
         coarser meshes, coarsest first, each refined once being the next (the last: this
         model's mesh), from which the first step starts (``wrinkle.sequencing``): used, and
-        needed, by ``nested=True``, from the reference state only (u0 None). Raises
+        needed, by ``nested=True``, from the reference state only (u0 None). probes: {name:
+        node indices} watched, with every displacement and the reactions, by the accuracy
+        stop (``convergence="accuracy"``) on the finer levels of a nested first step. Raises
         ConvergenceError, with the converged steps in its ``results`` attribute, if a step
         cannot be solved; ValueError for a bad setting or unrestrained rigid-body motion.
         """
@@ -505,7 +508,7 @@ class Model:
         results = Results(self)
         first_guess = None
         if coarse and settings.nested and u0 is None:
-            first_guess = NestedStart(coarse, self, settings, results.stopwatch)
+            first_guess = NestedStart(coarse, self, settings, results.stopwatch, probes)
 
         def record(load_factor: float, u: np.ndarray, solved: SolverResult) -> None:
             step = results.append(load_factor, u, solved)
@@ -522,6 +525,7 @@ class Model:
                 on_step=record,
                 timer=results.stopwatch,
                 first_guess=first_guess,
+                first_stop=None if first_guess is None else first_guess.stop,
             )
         except ConvergenceError as error:
             error.results = results

@@ -15,8 +15,11 @@
 - ``results.pvd``: a ParaView collection of the converged steps, timestep = load factor.
 - ``summary.json``: {"converged", "message", "steps": [{"step", "file", "load_factor",
   "iterations", "residual", "states": {"taut", "wrinkled", "slack"}, "reactions":
-  {support label: [Fx, Fy, Fz]}, "max_displacement"}], "wall_time" (seconds since the writer
-  was made), "units" and "case" if given}.
+  {support label: [Fx, Fy, Fz]}, "max_displacement", "stopped_by" ("residual" or
+  "accuracy"), and for "accuracy" "accuracy_stop": {"residual" (relative to the force scale),
+  "energy_gap", "discretisation_error", "contraction", "remaining_change": {quantity:
+  value}} (``wrinkle.solvers.stopping``)}], "wall_time" (seconds since the writer was made),
+  "units" and "case" if given}.
 - ``history.csv``: one row per step: step, load_factor, iterations, residual, taut, wrinkled,
   slack, ``<support>_Fx/_Fy/_Fz`` per support, ``<probe>_ux/_uy/_uz`` per probe (mean
   displacement of the probe's nodes).
@@ -181,18 +184,21 @@ class ResultWriter:
         support_forces = support_reactions(self.supports, reactions)
         probe_means = {name: u[nodes].mean(axis=0) for name, nodes in self.probes.items()}
         states = [int(s) for s in step.states]
-        self.steps.append(
-            {
-                "step": index,
-                "file": name,
-                "load_factor": float(step.load_factor),
-                "iterations": int(step.iterations),
-                "residual": float(step.residual),
-                "states": dict(zip(STATE_NAMES, states)),
-                "reactions": support_forces,
-                "max_displacement": float(np.linalg.norm(u, axis=1).max(initial=0.0)),
-            }
-        )
+        entry = {
+            "step": index,
+            "file": name,
+            "load_factor": float(step.load_factor),
+            "iterations": int(step.iterations),
+            "residual": float(step.residual),
+            "states": dict(zip(STATE_NAMES, states)),
+            "reactions": support_forces,
+            "max_displacement": float(np.linalg.norm(u, axis=1).max(initial=0.0)),
+            "stopped_by": getattr(step, "stopped_by", "residual"),
+        }
+        report = getattr(step, "stop_report", None)
+        if report is not None:
+            entry["accuracy_stop"] = {key: value for key, value in report.items() if key != "rule"}
+        self.steps.append(entry)
         row = [index, float(step.load_factor), int(step.iterations), float(step.residual)]
         row += states
         for force in support_forces.values():

@@ -6,7 +6,7 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,7 +25,9 @@ class StepResult:
     """One converged load step: load factor, displacements (n_dofs,), solver information.
 
     reactions: (n_dofs,) internal minus external force, nonzero at the supports (force);
-    states: (taut, wrinkled, slack) element counts.
+    states: (taut, wrinkled, slack) element counts; stopped_by: the test that ended the
+    solve, "residual" or "accuracy" (``wrinkle.solvers.stopping``), with stop_report the
+    numbers the accuracy stop decided on.
     """
 
     load_factor: float
@@ -34,6 +36,8 @@ class StepResult:
     residual: float
     reactions: np.ndarray
     states: tuple[int, int, int]
+    stopped_by: str = "residual"
+    stop_report: dict[str, Any] | None = None
 
 
 class Results:
@@ -78,6 +82,8 @@ class Results:
             ev.residual_norm,
             reactions,
             ev.states,
+            solved.stopped_by,
+            solved.stop_report,
         )
         self.steps.append(step)
         return step

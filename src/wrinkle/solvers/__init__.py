@@ -12,9 +12,11 @@ from wrinkle.solvers.stepping import (
     solve_step,
     tangent_prediction,
 )
+from wrinkle.solvers.stopping import AccuracyStop
 
 __all__ = [
     "LINEAR_SOLVERS",
+    "AccuracyStop",
     "SOLVERS",
     "ConvergenceError",
     "Evaluation",

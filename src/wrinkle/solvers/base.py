@@ -16,6 +16,7 @@ from wrinkle.solvers.linear import SymmetryCheck, diagonal_positions, make_linea
 from wrinkle.timing import LINEAR, Stopwatch
 
 __all__ = [
+    "AcceptedStep",
     "ConvergenceError",
     "Evaluation",
     "EvaluationFailure",
@@ -23,6 +24,7 @@ __all__ = [
     "Problem",
     "RegularisedSolver",
     "SolverResult",
+    "StopRule",
     "is_converged",
     "log_iteration",
     "shifted",
@@ -102,15 +104,47 @@ class Problem(Protocol):
     def evaluate(self, u: np.ndarray, stiffness: bool = True) -> Evaluation: ...
 
 
+@dataclass(frozen=True)
+class AcceptedStep:
+    """One accepted iteration of a solve.
+
+    energy: the potential energy after it (J; nan without a potential); predicted: the
+    decrease of the merit its model predicted for the full step; rho: actual over predicted
+    decrease; full: whether the full step was taken (not a shortened one, ``backtrack``);
+    theta: its regularisation; u: the displacements after it (n_dofs,); evaluation: there.
+    """
+
+    energy: float
+    predicted: float
+    rho: float
+    full: bool
+    theta: float
+    u: np.ndarray
+    evaluation: Evaluation
+
+
+class StopRule(Protocol):
+    """A test that may end a solve before the residual test does
+    (``wrinkle.solvers.stopping.AccuracyStop``): called with the start of one solve (as a
+    step with rho nan) and then after each accepted iteration, it returns a report (a dict
+    of the numbers it decided on) to stop at that step, or None to go on. A rule keeps what
+    it needs of earlier steps; one rule serves one solve."""
+
+    def __call__(self, step: AcceptedStep) -> dict[str, Any] | None: ...
+
+
 @dataclass
 class SolverResult:
-    """A converged solve: displacements (n_dofs,), iteration count, residual history and
-    the last evaluation."""
+    """A converged solve: displacements (n_dofs,), iteration count, residual history, the
+    last evaluation, which test ended it (``stopped_by``: "residual", or "accuracy" with
+    ``stop_report`` the numbers the stop rule decided on)."""
 
     u: np.ndarray
     iterations: int
     residual_norms: list[float]
     evaluation: Evaluation  # at u
+    stopped_by: str = "residual"
+    stop_report: dict[str, Any] | None = None
 
 
 class ConvergenceError(RuntimeError):
@@ -306,11 +340,17 @@ class RegularisedSolver(ABC):
         return None
 
     def solve(
-        self, problem: Problem, u0: np.ndarray, at_start: Evaluation | None = None
+        self,
+        problem: Problem,
+        u0: np.ndarray,
+        at_start: Evaluation | None = None,
+        stop: StopRule | None = None,
     ) -> SolverResult:
         """Solve from u0 (prescribed values already set); raise ConvergenceError if it fails.
         at_start: problem's evaluation at u0 if the caller has it, with or without stiffness;
-        a start already in balance then costs no evaluation of the stiffness."""
+        a start already in balance then costs no evaluation of the stiffness. stop: a rule
+        that may end the solve before the residual test (``StopRule``), asked after each
+        accepted iteration."""
         self._time_with(problem)
         u = np.array(u0, dtype=float)
         if at_start is not None and is_converged(at_start, self.tolerance):
@@ -324,13 +364,20 @@ class RegularisedSolver(ABC):
         ev = start
         history = [ev.residual_norm]
         theta = self.initial_theta(ev.tangent, problem.free)
+        accepted = AcceptedStep(ev.energy, math.nan, math.nan, False, theta, u, ev)
         for iteration in range(self.max_iterations + 1):
             log_iteration(self.method, iteration, ev, theta)
             if is_converged(ev, self.tolerance):
                 return SolverResult(u, iteration, history, ev)
+            if stop is not None:
+                report = stop(accepted)
+                if report is not None:
+                    logger.info("%s: stopped by the accuracy rule: %s", self.method, report)
+                    return SolverResult(u, iteration, history, ev, "accuracy", report)
             if iteration == self.max_iterations:
                 break
             for _ in range(self.max_rejections):
+                step_theta = theta
                 step, predicted = self.trial_step(ev, theta, problem.free)
                 trial = None
                 if step is not None and predicted > 0:
@@ -343,10 +390,12 @@ class RegularisedSolver(ABC):
                 if rho > 0.0 and step is not None and trial is not None:
                     u = u + step
                     ev = trial
+                    full = True
                     break
                 shorter = None if step is None else self.backtrack(problem, u, ev, step)
                 if shorter is not None:
                     u, ev = shorter
+                    full = False
                     break
             else:
                 raise ConvergenceError(
@@ -355,6 +404,7 @@ class RegularisedSolver(ABC):
                     history,
                 )
             history.append(ev.residual_norm)
+            accepted = AcceptedStep(ev.energy, predicted, rho, full, step_theta, u, ev)
         raise ConvergenceError(
             f"{self.method}: not converged in {self.max_iterations} iterations "
             f"(residual {ev.residual_norm:.3e}, needed {self.tolerance * ev.force_scale:.3e})",

@@ -15,7 +15,11 @@ from wrinkle.solvers.newton import RegularisedNewton
 from wrinkle.solvers.restricted_step import RestrictedStep
 from wrinkle.solvers.stepping import StepController
 
-__all__ = ["SOLVERS", "SolverSettings", "make_solver"]
+__all__ = ["CONVERGENCE_TESTS", "SOLVERS", "SolverSettings", "make_solver"]
+
+# the tests that may end a solve: the residual test alone, or the accuracy stop too
+# (``wrinkle.solvers.stopping``) on the finer levels of a mesh sequence
+CONVERGENCE_TESTS = ("residual", "accuracy")
 
 SOLVERS: dict[str, type[RegularisedSolver]] = {
     "newton": RegularisedNewton,
@@ -78,7 +82,11 @@ class SolverSettings:
     look_ahead (if the first step fails, solve the end of the path first and the levels below
     it downwards, before cutting back); nested: start the first load step from the solution of
     coarser meshes (``Model.solve``'s ``coarse``; a case file makes them from ``[mesh]
-    refine``).
+    refine``). convergence: "residual", or "accuracy" to let the accuracy stop
+    (``wrinkle.solvers.stopping``) end the solves of the finer levels of a nested first
+    step, with accuracy_energy (eta, the fraction of the discretisation error of the energy
+    that may remain) and accuracy_change (the largest remaining change of a probe or
+    reaction, relative to the largest displacement or the force scale).
     Raises ValueError naming the first bad field.
     """
 
@@ -94,6 +102,9 @@ class SolverSettings:
     target_iterations: int = 6
     look_ahead: bool = True
     nested: bool = False
+    convergence: str = "residual"
+    accuracy_energy: float = 0.1
+    accuracy_change: float = 1e-4
 
     def __post_init__(self) -> None:
         linear_solvers = ["auto", *LINEAR_SOLVERS]
@@ -145,12 +156,34 @@ class SolverSettings:
             ),
             ("look_ahead", lambda: isinstance(self.look_ahead, bool), "true or false"),
             ("nested", lambda: isinstance(self.nested, bool), "true or false"),
+            (
+                "convergence",
+                lambda: self.convergence in CONVERGENCE_TESTS,
+                f"one of {list(CONVERGENCE_TESTS)}",
+            ),
+            (
+                "accuracy_energy",
+                lambda: _is_number(self.accuracy_energy) and 0 < self.accuracy_energy <= 1,
+                "a number in (0, 1]",
+            ),
+            (
+                "accuracy_change",
+                lambda: (
+                    _is_number(self.accuracy_change) and 0 < self.accuracy_change <= MAX_TOLERANCE
+                ),
+                f"a number in (0, {MAX_TOLERANCE}]",
+            ),
         ]
         for name, holds, requirement in rules:
             if not holds():
                 raise ValueError(
                     f"solver {name} must be {requirement}, got {getattr(self, name)!r}"
                 )
+        if self.convergence == "accuracy" and not self.nested:
+            raise ValueError(
+                "solver convergence = 'accuracy' needs nested = true: the mesh's discretisation "
+                "error is estimated from the solution of the coarser mesh"
+            )
 
     def replace(self, **changes: Any) -> SolverSettings:
         """A copy with some fields changed (values None are ignored); TypeError for a name

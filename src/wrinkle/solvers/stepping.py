@@ -28,6 +28,7 @@ from wrinkle.solvers.base import (
     Problem,
     RegularisedSolver,
     SolverResult,
+    StopRule,
     is_converged,
     try_evaluate,
 )
@@ -147,6 +148,7 @@ def solve_step(
     solver: RegularisedSolver,
     predicted: np.ndarray | None = None,
     trusted: bool = False,
+    stop: StopRule | None = None,
 ) -> SolverResult:
     """Solve one load level from the displacements u (n_dofs,).
 
@@ -155,8 +157,9 @@ def solve_step(
     is the tangent prediction (``tangent_prediction``; solvers with ``tangent_predictor``
     only). The solve starts from the guess, with the new prescribed values, instead of from
     u if the guess is in balance already (one evaluation of the forces) or its out-of-balance
-    force is smaller (two), or, if ``trusted`` (a solution of a coarser mesh), always. Raises
-    ConvergenceError if the solver fails.
+    force is smaller (two), or, if ``trusted`` (a solution of a coarser mesh), always.
+    stop: a rule that may end the solve before the residual test, used from a trusted guess
+    only (``wrinkle.solvers.stopping``). Raises ConvergenceError if the solver fails.
     """
     constrained = ~problem.free
     start = np.where(constrained, problem.prescribed, u)
@@ -170,7 +173,7 @@ def solve_step(
         at_guess = try_evaluate(problem, guess, stiffness=False)
         if at_guess is not None and trusted:
             logger.info("load factor %.6g starts from the coarser mesh", problem.load_factor)
-            return solver.solve(problem, guess, at_guess)
+            return solver.solve(problem, guess, at_guess, stop=stop)
         if at_guess is not None:
             if not is_converged(at_guess, solver.tolerance):
                 at_start = try_evaluate(problem, start, stiffness=False)
@@ -182,6 +185,7 @@ def solve_step(
 
 OnStep = Callable[[float, np.ndarray, SolverResult], None]
 FirstGuess = Callable[[float], np.ndarray | None]
+FirstStop = Callable[[float], StopRule | None]
 Level = tuple[float, np.ndarray, SolverResult]  # load factor, displacements, the solve
 
 
@@ -241,14 +245,18 @@ def _from_the_end(
     u: np.ndarray,
     timer: Stopwatch | None,
     first_guess: FirstGuess | None,
+    first_stop: FirstStop | None,
 ) -> list[Level] | None:
     """The look-ahead after a failed first step: the end of the path (load factor 1) solved
     from the start u, then the levels below it (``descend``); None if either fails."""
     logger.info("the first step failed: solving the end of the path first, then downwards")
     problem = _problem_at(system, 1.0, timer)
     predicted = None if first_guess is None else first_guess(1.0)
+    stop = None if predicted is None or first_stop is None else first_stop(1.0)
     try:
-        solved = solve_step(problem, u, solver, predicted=predicted, trusted=predicted is not None)
+        solved = solve_step(
+            problem, u, solver, predicted=predicted, trusted=predicted is not None, stop=stop
+        )
     except ConvergenceError:
         logger.info("the end of the path failed as well; cutting the first step back")
         return None
@@ -267,6 +275,7 @@ def follow_load_path(
     on_step: OnStep | None = None,
     timer: Stopwatch | None = None,
     first_guess: FirstGuess | None = None,
+    first_stop: FirstStop | None = None,
 ) -> np.ndarray:
     """Load control from load factor 0 to 1: increments from ``controller``, each step
     solved by ``solve_step`` from the extrapolation of the last two converged states (u0, or
@@ -280,7 +289,8 @@ def follow_load_path(
     the ``SolverResult``); timer: a stopwatch the problems share (the time of their parts);
     first_guess(load_factor): a start for the first step, (n_dofs,), or None, such as the
     solution of coarser meshes interpolated (``wrinkle.sequencing``), used without the
-    comparison of ``solve_step``.
+    comparison of ``solve_step``; first_stop(load_factor): a rule that may end the solve from
+    that start (``wrinkle.solvers.stopping``), or None.
     Returns the displacements at load factor 1. Raises ConvergenceError, with ``reached``
     (the last converged load factor) set, when a step fails at the smallest increment.
     """
@@ -293,18 +303,22 @@ def follow_load_path(
         trial_factor = min(1.0, factor + increment)
         problem = _problem_at(system, trial_factor, timer)
         predicted = extrapolate(previous, factor, u, trial_factor)
-        trusted = False
+        trusted, stop = False, None
         if previous is None and first_guess is not None:
             predicted = first_guess(trial_factor)
             trusted = predicted is not None
+            if trusted and first_stop is not None:
+                stop = first_stop(trial_factor)
         try:
-            solved = solve_step(problem, u, solver, predicted=predicted, trusted=trusted)
+            solved = solve_step(problem, u, solver, predicted=predicted, trusted=trusted, stop=stop)
         except ConvergenceError as error:
             if previous is None and trial_factor >= 1.0 - _END:
                 looked_ahead = True  # the end of the path failed from this start already
             elif previous is None and not looked_ahead:
                 looked_ahead = True
-                levels = _from_the_end(system, solver, controller, u, timer, first_guess)
+                levels = _from_the_end(
+                    system, solver, controller, u, timer, first_guess, first_stop
+                )
                 if levels is not None:
                     for level in levels:
                         if on_step is not None:
