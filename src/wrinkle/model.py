@@ -468,6 +468,17 @@ class Model:
             )
         return self._system
 
+    def _describe_load(self, load_factor: float) -> str:
+        """The loads at ``load_factor`` in words, for messages: the largest pressure, else
+        the largest nodal force, else the load factor alone."""
+        pressure = float(np.abs(self.pressure).max(initial=0.0))
+        if pressure > 0:
+            return f"pressure {load_factor * pressure:.4g}"
+        force = float(np.abs(self.forces).max(initial=0.0))
+        if force > 0:
+            return f"largest nodal force {load_factor * force:.4g}"
+        return f"load factor {load_factor:.4g}"
+
     def solve(
         self,
         settings: SolverSettings | None = None,
@@ -526,6 +537,8 @@ class Model:
                 timer=results.stopwatch,
                 first_guess=first_guess,
                 first_stop=None if first_guess is None else first_guess.stop,
+                describe_load=self._describe_load,
+                stability=system.encloses_volume,
             )
         except ConvergenceError as error:
             error.results = results

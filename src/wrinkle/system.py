@@ -42,7 +42,23 @@ from wrinkle.solvers.linear import make_linear_solver
 from wrinkle.timing import ASSEMBLY, ELEMENTS, Stopwatch
 from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, Wrinkling, WrinklingError
 
-__all__ = ["DiscreteSystem", "FollowerEdgeLoad", "Loading", "StepProblem"]
+__all__ = [
+    "MIN_AREA_RATIO",
+    "MIN_VOLUME_RATIO",
+    "DiscreteSystem",
+    "FollowerEdgeLoad",
+    "Loading",
+    "StepProblem",
+]
+
+# An element whose current area is below this fraction of its reference area has collapsed
+# (a triangle shrunk a thousandfold across in both directions): no membrane state, slack or
+# not, is that, and a solve that ends there has found the spurious equilibrium of a sheet
+# crushed to a point, which carries no load (a balloon past its limit point).
+MIN_AREA_RATIO = 1e-6
+# likewise for the volume a pressurised membrane encloses (against the origin, so against
+# symmetry planes through it), where its reference state encloses one
+MIN_VOLUME_RATIO = 1e-6
 
 StiffnessSink = Callable[[np.ndarray | slice, np.ndarray], None]
 
@@ -159,6 +175,7 @@ class DiscreteSystem:
         order = np.concatenate([elements for elements, _ in self.groups])
         self._inverse_order = np.argsort(order) if len(self.groups) > 1 else None
         self.force_round_off = self._force_round_off()
+        self._reference_volume: float | None = None  # enclosed by the pressurised elements
         self.bending = bending
         if bending is not None:
             rows, columns, values = bending.entries()
@@ -461,6 +478,58 @@ class DiscreteSystem:
             else:
                 subtract_pressure_stiffness(K, x, load_factor * pressure)
 
+    @property
+    def encloses_volume(self) -> bool:
+        """Whether pressurised elements enclose a volume in the reference state (against the
+        origin, so against symmetry planes through it): a balloon or an inflatable tube,
+        whose pressure can pass a maximum, not a flat sheet inflated (``Model.solve`` checks
+        such a model's states for stability, ``wrinkle.solvers.stability``)."""
+        return bool(self.reference_volume != 0.0)
+
+    @property
+    def reference_volume(self) -> float:
+        """The signed volume the pressurised elements enclose in the reference state (the
+        sum of their cone volumes from the origin, ``pressure_volume``); 0 without them."""
+        if self._reference_volume is None:
+            loaded = self._pressurised()
+            volume = 0.0
+            if loaded is not None:
+                x0 = self.mesh.nodes[self.mesh.triangles[loaded]]
+                volume = float(np.sum(pressure_volume(x0)))
+            self._reference_volume = volume
+        return self._reference_volume
+
+    def inadmissible(self, x_elements: np.ndarray) -> str | None:
+        """Why the state with element coordinates x_elements (n_elements, 3, 3) is not a
+        membrane state, or None if it is one: an element whose area ratio a / A0 is below
+        MIN_AREA_RATIO (collapsed), or an enclosed volume (the signed cone volumes of the
+        pressurised elements, ``pressure_volume``) below MIN_VOLUME_RATIO of the reference
+        one, where that is not zero. Non-finite coordinates are inadmissible too."""
+        if not np.all(np.isfinite(x_elements)):
+            return "the coordinates are not finite"
+        edges = x_elements[:, :2] - x_elements[:, 2:3]
+        ratio = np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1) / (
+            2.0 * self.geometry.area
+        )
+        collapsed = np.flatnonzero(ratio < MIN_AREA_RATIO)
+        if collapsed.size:
+            worst = int(collapsed[np.argmin(ratio[collapsed])])
+            return (
+                f"{collapsed.size} element(s) collapsed, element {worst} to an area ratio of "
+                f"{ratio[worst]:.3g} (below {MIN_AREA_RATIO:g})"
+            )
+        loaded = self._pressurised()
+        reference = self.reference_volume
+        if loaded is None or reference == 0.0:
+            return None
+        volume = float(np.sum(pressure_volume(x_elements[loaded])))
+        if volume / reference < MIN_VOLUME_RATIO:
+            return (
+                f"the enclosed volume collapsed to {volume / reference:.3g} of its reference "
+                f"value {abs(reference):.3g} (below {MIN_VOLUME_RATIO:g})"
+            )
+        return None
+
     def pressure_work(self, u: np.ndarray, x_elements: np.ndarray | None = None) -> float:
         """Sum of p V_cone over the pressurised elements at full load (``pressure_volume``):
         the pressure's potential is minus this; exact when the boundary is held or moves in
@@ -629,4 +698,5 @@ class StepProblem:
             pattern.diagonal,
             self.metric,
             reactions,
+            system.inadmissible(x),
         )

@@ -12,7 +12,12 @@ from typing import Any, Protocol
 import numpy as np
 import scipy.sparse as sp
 
-from wrinkle.solvers.linear import SymmetryCheck, diagonal_positions, make_linear_solver
+from wrinkle.solvers.linear import (
+    SuperLU,
+    SymmetryCheck,
+    diagonal_positions,
+    make_linear_solver,
+)
 from wrinkle.timing import LINEAR, Stopwatch
 
 __all__ = [
@@ -20,6 +25,7 @@ __all__ = [
     "ConvergenceError",
     "Evaluation",
     "EvaluationFailure",
+    "InadmissibleState",
     "LinearSolver",
     "Problem",
     "RegularisedSolver",
@@ -58,6 +64,8 @@ class Evaluation:
         None for the identity.
     reactions: (n_dofs,) internal minus external force at the constrained dofs, zero
         elsewhere (the support reactions), if the problem gives them.
+    inadmissible: why the state is not a physical one (collapsed elements or enclosed
+        volume), or None; a solve never ends on such a state.
     """
 
     residual: np.ndarray
@@ -70,6 +78,7 @@ class Evaluation:
     diagonal: np.ndarray | None = None
     metric: np.ndarray | None = None
     reactions: np.ndarray | None = None
+    inadmissible: str | None = None
 
     @property
     def residual_norm(self) -> float:
@@ -149,14 +158,21 @@ class SolverResult:
 
 class ConvergenceError(RuntimeError):
     """The solver did not converge; ``history`` holds the residual norms it reached,
-    ``reached`` (set by a path follower) the last converged load factor and ``results`` (set
-    by ``Model.solve``) the load steps that did converge."""
+    ``reached`` (set by a path follower) the last converged load factor, ``limit_point``
+    (set by a path follower) that load factor where the path failed at a limit point of the
+    load, and ``results`` (set by ``Model.solve``) the load steps that did converge."""
 
     def __init__(self, message: str, history: list[float]):
         super().__init__(message)
         self.history = history
         self.reached: float | None = None
+        self.limit_point: float | None = None
         self.results: Any = None
+
+
+class InadmissibleState(ConvergenceError):
+    """A solve reached balance in a state that is not physical (collapsed elements or a
+    collapsed enclosed volume): a failure, never an answer."""
 
 
 class EvaluationFailure(RuntimeError):
@@ -290,6 +306,25 @@ class RegularisedSolver(ABC):
 
         return timed_solve
 
+    def is_symmetric(self, A: sp.csr_matrix) -> bool:
+        """Whether A is symmetric to round-off (``SymmetryCheck``)."""
+        return bool(self._is_symmetric(A))
+
+    def negative_eigenvalues(self, A: sp.csr_matrix) -> int | None:
+        """The number of negative eigenvalues of the symmetric matrix A, from a
+        factorisation by the linear back-end (PARDISO's or SuperLU's inertia; the other
+        back-ends hand the matrix to SuperLU); None where it cannot be had. The time and
+        the factorisation go to the problem's stopwatch."""
+        if self.linear is None:
+            self.linear = make_linear_solver(self.linear_solver, A.shape[0])
+        count = getattr(self.linear, "negative_pivots", None)
+        if count is None:
+            count = SuperLU().negative_pivots
+        with self._timer.part(LINEAR):
+            negative = count(A)
+        self._timer.factorisations += 1
+        return negative
+
     def release(self) -> None:
         """Free the linear back-end's factorisations; the solver stays usable."""
         if self.linear is not None:
@@ -339,6 +374,15 @@ class RegularisedSolver(ABC):
         a new step is factorised). None here; a subclass may search."""
         return None
 
+    def _refuse_inadmissible(self, ev: Evaluation, history: list[float]) -> None:
+        """Raise ConvergenceError if the balanced state of ev is not a physical one: a solve
+        must not end there (``Evaluation.inadmissible``)."""
+        if ev.inadmissible is not None:
+            raise InadmissibleState(
+                f"{self.method}: the balanced state is not admissible: {ev.inadmissible}",
+                history,
+            )
+
     def solve(
         self,
         problem: Problem,
@@ -355,6 +399,7 @@ class RegularisedSolver(ABC):
         u = np.array(u0, dtype=float)
         if at_start is not None and is_converged(at_start, self.tolerance):
             log_iteration(self.method, 0, at_start, None)
+            self._refuse_inadmissible(at_start, [at_start.residual_norm])
             return SolverResult(u, 0, [at_start.residual_norm], at_start)
         start = at_start
         if start is None or start.stiffness is None:
@@ -368,10 +413,12 @@ class RegularisedSolver(ABC):
         for iteration in range(self.max_iterations + 1):
             log_iteration(self.method, iteration, ev, theta)
             if is_converged(ev, self.tolerance):
+                self._refuse_inadmissible(ev, history)
                 return SolverResult(u, iteration, history, ev)
             if stop is not None:
                 report = stop(accepted)
                 if report is not None:
+                    self._refuse_inadmissible(ev, history)
                     logger.info("%s: stopped by the accuracy rule: %s", self.method, report)
                     return SolverResult(u, iteration, history, ev, "accuracy", report)
             if iteration == self.max_iterations:

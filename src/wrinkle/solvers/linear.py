@@ -88,6 +88,25 @@ class SuperLU(_FreedWithTheObject):
             return None
         return lu.solve
 
+    def negative_pivots(self, A: sp.csr_matrix) -> int | None:
+        """The number of negative eigenvalues of the symmetric matrix A (its inertia, by
+        Sylvester's law from the pivots of the symmetric factorisation P A P^T = L D L^T
+        that diagonal pivoting with one ordering of rows and columns gives); None if A is
+        singular or the pivots left the diagonal."""
+        try:
+            lu = spla.splu(
+                A.tocsc(),
+                permc_spec="MMD_AT_PLUS_A",
+                diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True},
+            )
+        except RuntimeError as error:
+            logger.debug("factorisation failed: %s", error)
+            return None
+        if not np.array_equal(lu.perm_r, lu.perm_c):
+            return None
+        return int(np.count_nonzero(lu.U.diagonal() < 0.0))
+
 
 class _PatternCache:
     """Remembers the pattern (indptr, indices) whose ordering a back-end has analysed."""
@@ -244,6 +263,13 @@ class Pardiso:
             return solver._call_pardiso(M, np.asfortranarray(b[:, None]))[:, 0]
 
         return solve
+
+    def negative_pivots(self, A: sp.csr_matrix) -> int | None:
+        """The number of negative eigenvalues of the symmetric matrix A: the inertia that
+        PARDISO's symmetric indefinite factorisation reports (iparm(23)); None if it fails."""
+        if self.factorise(A, symmetric=True) is None:
+            return None
+        return int(self._solvers[-2].iparm[22])
 
 
 class Cholmod(_FreedWithTheObject):

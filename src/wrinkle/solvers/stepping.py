@@ -32,10 +32,13 @@ from wrinkle.solvers.base import (
     is_converged,
     try_evaluate,
 )
+from wrinkle.solvers.stability import UNSTABLE, unstable_modes
 from wrinkle.timing import Stopwatch
 
 __all__ = [
+    "LIMIT_SLOPE",
     "LoadLevels",
+    "PathSlope",
     "StepController",
     "SteppedProblem",
     "descend",
@@ -48,6 +51,13 @@ __all__ = [
 logger = logging.getLogger("wrinkle")
 
 _END = 1e-12  # a load factor within this of 1 is the end of the path
+# A path that fails where its load-displacement slope has fallen below this fraction of the
+# first step's has met a limit point of the load (``PathSlope``)
+LIMIT_SLOPE = 0.05
+# A converged step whose slope is below LIMIT_SLOPE and this many times below the step
+# before's has jumped across a limit point to another branch (approaching a maximum of the
+# load with cut-back steps, the slope falls by 2-4 times a step)
+JUMP = 10.0
 
 
 class SteppedProblem(Problem, Protocol):
@@ -246,9 +256,12 @@ def _from_the_end(
     timer: Stopwatch | None,
     first_guess: FirstGuess | None,
     first_stop: FirstStop | None,
+    stability: tuple[RegularisedSolver, np.ndarray] | None,
 ) -> list[Level] | None:
     """The look-ahead after a failed first step: the end of the path (load factor 1) solved
-    from the start u, then the levels below it (``descend``); None if either fails."""
+    from the start u, then the levels below it (``descend``); None if either fails or the
+    levels are not a path load control may report (``_checked_levels``: past a limit
+    point)."""
     logger.info("the first step failed: solving the end of the path first, then downwards")
     problem = _problem_at(system, 1.0, timer)
     predicted = None if first_guess is None else first_guess(1.0)
@@ -264,7 +277,130 @@ def _from_the_end(
     levels = descend(system, solver, controller, (1.0, solved.u, solved), timer)
     if levels is None:
         logger.info("a step down from the end of the path failed; cutting the first step back")
+        return None
+    beyond = _checked_levels(levels, u, stability)
+    if beyond is not None:
+        logger.info("the levels from the end of the path are past a limit point: %s", beyond)
+        return None
     return levels
+
+
+class PathSlope:
+    """The load-displacement slope of a path, dlambda / |du| over each converged step,
+    relative to the first step's (Bergan's current stiffness parameter, with the
+    displacement norm for the work). It falls towards zero as the path nears a limit point
+    of the load, where load control cannot go on: a path that fails with the slope below
+    LIMIT_SLOPE and falling has met one (``limit_point``), and a step whose slope drops
+    below LIMIT_SLOPE and JUMP times below the step before's has jumped across one to
+    another branch (``jump``)."""
+
+    def __init__(self, u0: np.ndarray):
+        self._factor, self._u = 0.0, u0
+        self.relative: list[float] = []  # each converged step's slope over the first's
+        self._first: float | None = None
+
+    def _relative(self, factor: float, u: np.ndarray) -> float | None:
+        moved = float(np.linalg.norm(u - self._u))
+        if not (moved > 0.0 and factor > self._factor):
+            return None
+        slope = (factor - self._factor) / moved
+        return 1.0 if self._first is None else slope / self._first
+
+    def jump(self, factor: float, u: np.ndarray) -> str | None:
+        """How a step to ``factor`` with displacements u (n_dofs,) jumped across a limit
+        point, or None if it did not."""
+        relative = self._relative(factor, u)
+        if relative is None or not self.relative:
+            return None
+        if relative < LIMIT_SLOPE and relative * JUMP < self.relative[-1]:
+            return (
+                f"the step from load factor {self._factor:.6g} to {factor:.6g} jumped to "
+                f"another branch (its displacements changed by {np.linalg.norm(u - self._u):.3g}"
+                f"; the load-displacement slope fell to {relative:.2g} of the first step's)"
+            )
+        return None
+
+    def record(self, factor: float, u: np.ndarray) -> None:
+        """A converged step to ``factor`` with displacements u (n_dofs,), accepted."""
+        moved = float(np.linalg.norm(u - self._u))
+        if moved > 0.0 and factor > self._factor:
+            slope = (factor - self._factor) / moved
+            if self._first is None:
+                self._first = slope
+            self.relative.append(slope / self._first)
+        self._factor, self._u = factor, u
+
+    def limit_point(self) -> float | None:
+        """The relative slope of the last step if the path has met a limit point there
+        (below LIMIT_SLOPE and below the step before's), else None."""
+        if len(self.relative) < 2:
+            return None
+        last, before = self.relative[-1], self.relative[-2]
+        return last if last < LIMIT_SLOPE and last < before else None
+
+
+class PastALimit(ConvergenceError):
+    """A step that balanced in a state beyond a limit point of the load: unstable, or
+    reached by a jump to another branch; treated as a failed step (cut back)."""
+
+
+def _check_state(
+    solved: SolverResult,
+    factor: float,
+    slope: PathSlope,
+    stability: tuple[RegularisedSolver, np.ndarray] | None,
+) -> None:
+    """Raise PastALimit if the state a step reached at load factor ``factor`` jumped across
+    a limit point (``PathSlope.jump``) or, with ``stability`` (the solver and the free
+    components), is unstable (``wrinkle.solvers.stability``)."""
+    if stability is not None:
+        solver, free = stability
+        count = unstable_modes(solver, solved.evaluation, free)
+        if count:
+            raise PastALimit(
+                f"the state reached at load factor {factor:.6g} is unstable: its tangent has "
+                f"{count} eigenvalue(s) below -{UNSTABLE:g} of its mean diagonal stiffness",
+                solved.residual_norms,
+            )
+    jumped = slope.jump(factor, solved.u)
+    if jumped is not None:
+        raise PastALimit(jumped, solved.residual_norms)
+
+
+def _checked_levels(
+    levels: list[Level],
+    u0: np.ndarray,
+    stability: tuple[RegularisedSolver, np.ndarray] | None,
+) -> str | None:
+    """Why the levels (increasing load factor, from the start u0 at load factor 0) are not
+    a path that load control may report (``_check_state``), or None if they are."""
+    slope = PathSlope(u0)
+    for factor, u, solved in levels:
+        try:
+            _check_state(solved, factor, slope, stability)
+        except PastALimit as error:
+            return str(error)
+        slope.record(factor, u)
+    return None
+
+
+def _limit_point_error(
+    factor: float,
+    what: str,
+    describe_load: Callable[[float], str] | None,
+    history: list[float],
+) -> ConvergenceError:
+    """The ConvergenceError of a path that met a limit point of the load after load factor
+    ``factor`` (its last step on the branch followed); what: how it showed."""
+    load = "" if describe_load is None else f" ({describe_load(factor)})"
+    failure = ConvergenceError(
+        f"limit point passed near load factor {factor:.6g}{load}: {what}; load control "
+        "cannot pass a maximum of the load (arc-length or volume control would be needed, "
+        "and wrinkle has neither yet)",
+        history,
+    )
+    failure.reached = failure.limit_point = factor
+    return failure
 
 
 def follow_load_path(
@@ -276,6 +412,8 @@ def follow_load_path(
     timer: Stopwatch | None = None,
     first_guess: FirstGuess | None = None,
     first_stop: FirstStop | None = None,
+    describe_load: Callable[[float], str] | None = None,
+    stability: bool = False,
 ) -> np.ndarray:
     """Load control from load factor 0 to 1: increments from ``controller``, each step
     solved by ``solve_step`` from the extrapolation of the last two converged states (u0, or
@@ -290,11 +428,19 @@ def follow_load_path(
     first_guess(load_factor): a start for the first step, (n_dofs,), or None, such as the
     solution of coarser meshes interpolated (``wrinkle.sequencing``), used without the
     comparison of ``solve_step``; first_stop(load_factor): a rule that may end the solve from
-    that start (``wrinkle.solvers.stopping``), or None.
+    that start (``wrinkle.solvers.stopping``), or None; describe_load(load_factor): the loads
+    at a load factor in words (such as "pressure 4958"), for the message of a limit point;
+    stability: check that each converged state is stable (``wrinkle.solvers.stability``, one
+    factorisation a step), and end the path at the first that is not.
     Returns the displacements at load factor 1. Raises ConvergenceError, with ``reached``
-    (the last converged load factor) set, when a step fails at the smallest increment.
+    (the last converged load factor) set, when a step fails at the smallest increment; where
+    the load-displacement slope had fallen to a limit point of the load there
+    (``PathSlope``), its message says so first and its ``limit_point`` is that load factor.
+    A step that jumps across a limit point (``PathSlope.jump``) or, with ``stability``,
+    reaches an unstable state is a failed step (``PastALimit``), cut back like any other.
     """
     u = np.zeros(system.n_dofs) if u0 is None else np.array(u0, dtype=float)
+    slope = PathSlope(u)
     increment = controller.first()
     factor = 0.0
     previous: tuple[float, np.ndarray] | None = None  # the converged state before the last
@@ -309,15 +455,17 @@ def follow_load_path(
             trusted = predicted is not None
             if trusted and first_stop is not None:
                 stop = first_stop(trial_factor)
+        checks = (solver, problem.free) if stability else None
         try:
             solved = solve_step(problem, u, solver, predicted=predicted, trusted=trusted, stop=stop)
+            _check_state(solved, trial_factor, slope, checks)
         except ConvergenceError as error:
             if previous is None and trial_factor >= 1.0 - _END:
                 looked_ahead = True  # the end of the path failed from this start already
             elif previous is None and not looked_ahead:
                 looked_ahead = True
                 levels = _from_the_end(
-                    system, solver, controller, u, timer, first_guess, first_stop
+                    system, solver, controller, u, timer, first_guess, first_stop, checks
                 )
                 if levels is not None:
                     for level in levels:
@@ -326,16 +474,34 @@ def follow_load_path(
                     return levels[-1][1]
             smaller = controller.after_failure(increment)
             if smaller is None:
-                failure = ConvergenceError(
+                message = (
                     f"load step to factor {trial_factor:.6g} failed with increment "
-                    f"{increment:.3g} (minimum {controller.min_step:.3g}): {error}",
-                    error.history,
+                    f"{increment:.3g} (minimum {controller.min_step:.3g}): {error}"
                 )
+                relative = slope.limit_point()
+                if relative is not None or isinstance(error, PastALimit):
+                    fell = (
+                        ""
+                        if relative is None
+                        else (
+                            f"the load-displacement slope fell to {relative:.2g} of the first "
+                            "step's and "
+                        )
+                    )
+                    raise _limit_point_error(
+                        factor,
+                        f"{fell}no step beyond it converged to a stable state on its branch "
+                        f"({message})",
+                        describe_load,
+                        error.history,
+                    ) from error
+                failure = ConvergenceError(message, error.history)
                 failure.reached = factor
                 raise failure from error
             increment = smaller
             logger.info("step to %.6g failed; increment cut to %.4g", trial_factor, increment)
             continue
+        slope.record(trial_factor, solved.u)
         previous = (factor, u)
         factor, u = trial_factor, solved.u
         logger.info("load factor %.6g converged in %d iterations", factor, solved.iterations)
