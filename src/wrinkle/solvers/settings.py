@@ -78,7 +78,7 @@ class SolverSettings:
     look_ahead (if the first step fails, solve the end of the path first and the levels below
     it downwards, before cutting back); nested: start the first load step from the solution of
     coarser meshes (``Model.solve``'s ``coarse``; a case file makes them from ``[mesh]
-    refine``).
+    refine`` and ``[mesh] levels``).
     Raises ValueError naming the first bad field.
     """
 
