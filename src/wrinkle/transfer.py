@@ -52,37 +52,39 @@ def closest_on_triangles(points: np.ndarray, corners: np.ndarray) -> np.ndarray:
     point: points (n, 3), corners (n, 3, 3) (triangle i's corners a, b, c in rows). The
     Voronoi regions of the corners, edges and face of each triangle (Ericson, Real-Time
     Collision Detection, 5.1.5), tested for all points at once."""
-    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
-    ab, ac = b - a, c - a
-    ap, bp, cp = points - a, points - b, points - c
+    a, b, c = corners.transpose(1, 2, 0)  # (3 components, n) each
+    ab, ac, ap = b - a, c - a, points.T - a
 
     def dot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return np.einsum("ij,ij->i", x, y)
+        return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
 
     d1, d2 = dot(ab, ap), dot(ac, ap)
-    d3, d4 = dot(ab, bp), dot(ac, bp)
-    d5, d6 = dot(ab, cp), dot(ac, cp)
+    ab_ab, ab_ac, ac_ac = dot(ab, ab), dot(ab, ac), dot(ac, ac)
+    d3, d4 = d1 - ab_ab, d2 - ab_ac  # ab.bp, ac.bp with bp = ap - ab
+    d5, d6 = d1 - ab_ac, d2 - ac_ac  # ab.cp, ac.cp with cp = ap - ac
     va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
     with np.errstate(divide="ignore", invalid="ignore"):
         total = va + vb + vc
-        v, w = vb / total, vc / total  # inside the face
+        v, w = vb / total, vc / total  # inside the face: q = a + v ab + w ac
         on_ab = d1 / (d1 - d3)
         on_ac = d2 / (d2 - d6)
         on_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-    bary = np.column_stack([1.0 - v - w, v, w])
-    zero, one = np.zeros_like(d1), np.ones_like(d1)
     # the regions in reverse order of Ericson's tests, so that the first test that holds wins
     regions = [
-        ((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0), (zero, 1.0 - on_bc, on_bc)),  # edge bc
-        ((vb <= 0) & (d2 >= 0) & (d6 <= 0), (1.0 - on_ac, zero, on_ac)),  # edge ac
-        ((d6 >= 0) & (d5 <= d6), (zero, zero, one)),  # corner c
-        ((vc <= 0) & (d1 >= 0) & (d3 <= 0), (1.0 - on_ab, on_ab, zero)),  # edge ab
-        ((d3 >= 0) & (d4 <= d3), (zero, one, zero)),  # corner b
-        ((d1 <= 0) & (d2 <= 0), (one, zero, zero)),  # corner a
+        ((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0), 1.0 - on_bc, on_bc),  # edge bc
+        ((vb <= 0) & (d2 >= 0) & (d6 <= 0), 0.0, on_ac),  # edge ac
+        ((d6 >= 0) & (d5 <= d6), 0.0, 1.0),  # corner c
+        ((vc <= 0) & (d1 >= 0) & (d3 <= 0), on_ab, 0.0),  # edge ab
+        ((d3 >= 0) & (d4 <= d3), 1.0, 0.0),  # corner b
+        ((d1 <= 0) & (d2 <= 0), 0.0, 0.0),  # corner a
     ]
-    for mask, (la, lb, lc) in regions:
-        bary[mask] = np.column_stack([la[mask], lb[mask], lc[mask]])
-    np.clip(bary, 0.0, 1.0, out=bary)  # -1e-16 for a point on an edge, from the face's formula
+    for mask, v_there, w_there in regions:
+        v = np.where(mask, v_there, v)
+        w = np.where(mask, w_there, w)
+    # -1e-16 for a point on an edge, from the face's formula: clipped, the sum kept at 1
+    v, w = np.clip(v, 0.0, 1.0), np.clip(w, 0.0, 1.0)
+    u = np.clip(1.0 - v - w, 0.0, 1.0)
+    bary = np.column_stack([u, v, w])
     return bary / bary.sum(axis=1, keepdims=True)
 
 
