@@ -11,7 +11,9 @@ levels'), and the unit square of
 examples/shear_stretch.toml (f = 5) under its boundary displacements; the three airbags on
 unstructured gmsh meshes of about as many triangles (``airbag_gmsh``, ``airbag_gmsh_bending``,
 ``airbag_gmsh_nested``: benchmarks/hard_cases/airbag_gmsh.toml, meshes made by
-benchmarks/gmsh_airbag.py, which needs the mesh extra). For each: elements,
+benchmarks/gmsh_airbag.py, which needs the mesh extra), and the bending gmsh airbag solved
+first on independent gmsh meshes of about 1/16 and 1/4 as many triangles
+(``airbag_gmsh_levels``: ``[mesh] levels``, wrinkle.transfer). For each: elements,
 unknowns, load steps, Newton iterations, wall time split into element evaluation, assembly,
 linear solves and the rest (``Results.timings``), the peak resident set, and the result
 (airbag: centre deflection; square: top-edge force F1). The case's load steps are kept (no
@@ -29,6 +31,8 @@ CSV.
         --max-elements 2e6 --max-iterations 600
     python benchmarks/scale.py --problems airbag --sizes 708 --max-iterations 2   # cost of
         # the first Newton iterations on the 10^6-element airbag
+    python benchmarks/scale.py --problems airbag_gmsh_levels airbag_gmsh_nested \
+        airbag_gmsh_bending --sizes 72 224 --in-turns   # each size, the three in turn
 """
 
 from __future__ import annotations
@@ -57,6 +61,7 @@ SIZES = {  # squares per side: 2 n^2 triangles
     "airbag_gmsh": [23, 71, 224],
     "airbag_gmsh_bending": [23, 71, 224],
     "airbag_gmsh_nested": [64, 128, 224],  # the finest mesh: a gmsh mesh refined (below)
+    "airbag_gmsh_levels": [64, 128, 224],  # the finest mesh; levels of n/4 and n/2 (below)
 }
 # problem: (case file in examples/, overrides beyond the mesh)
 CASES = {
@@ -68,6 +73,10 @@ CASES = {
     "airbag_gmsh": ("airbag_gmsh", {}),
     "airbag_gmsh_bending": ("airbag_gmsh", {"material": {"bending": True}}),
     "airbag_gmsh_nested": (
+        "airbag_gmsh",
+        {"material": {"bending": True}, "solver": {"nested": True}},
+    ),
+    "airbag_gmsh_levels": (
         "airbag_gmsh",
         {"material": {"bending": True}, "solver": {"nested": True}},
     ),
@@ -85,13 +94,28 @@ RESULT_NAMES = {
     "airbag_gmsh": "centre deflection (mm)",
     "airbag_gmsh_bending": "centre deflection (mm)",
     "airbag_gmsh_nested": "centre deflection (mm)",
+    "airbag_gmsh_levels": "centre deflection (mm)",
 }
+LEVELS = (4, 2)  # airbag_gmsh_levels: gmsh meshes of n / 4 and n / 2 squares a side first
 
 
 def mesh_overrides(problem: str, n: int, scratch: Path | None = None) -> dict:
     """The [mesh] overrides of an n x n mesh: for the nested problems, a mesh of about 32
     squares a side refined k times to n (n divisible by 2^k); for the gmsh problems a gmsh
-    mesh of about 2 n^2 triangles (or 2 (n / 2^k)^2, refined k times), written to scratch."""
+    mesh of about 2 n^2 triangles (or 2 (n / 2^k)^2, refined k times), written to scratch;
+    for airbag_gmsh_levels also gmsh meshes of about 2 (n / d)^2 triangles for each d of
+    ``LEVELS``, its [mesh] levels."""
+    if problem == "airbag_gmsh_levels":
+        from gmsh_airbag import write_airbag_mesh
+
+        if scratch is None:
+            raise ValueError(f"{problem}: the gmsh meshes need a scratch folder")
+        files = []
+        for divisor in (*LEVELS, 1):
+            path = scratch / f"airbag-{n}-{divisor}.msh"
+            write_airbag_mesh(round(2 * (n / divisor) ** 2), path, seed=divisor)
+            files.append(str(path))
+        return {"file": files[-1], "levels": files[:-1]}
     levels = 0
     if problem.endswith("nested"):
         levels = max(1, int(math.log2(n / 32)))
@@ -354,6 +378,12 @@ def main() -> None:
         default=1800.0,
         help="seconds per mesh before its process is stopped",
     )
+    parser.add_argument(
+        "--in-turns",
+        action="store_true",
+        help="each size for all the problems in turn (instead of each problem for all sizes), "
+        "so that a shared machine's load falls on all alike",
+    )
     parser.add_argument("--csv", default="scale.csv")
     parser.add_argument("--one", nargs=2, metavar=("PROBLEM", "N"), help=argparse.SUPPRESS)
     parser.add_argument("--progress", help=argparse.SUPPRESS)  # --one's partial rows go here
@@ -370,49 +400,51 @@ def main() -> None:
         f"{'rest s':>7} {'total s':>8} {'not linear':>10} {'peak MB':>8}  result"
     )
     rows = []
+    runs = [(problem, n) for problem in args.problems for n in args.sizes or SIZES[problem]]
+    if args.in_turns:
+        runs.sort(key=lambda run: run[1])  # stable: the problems in the order given
     with tempfile.TemporaryDirectory(prefix="scale-") as scratch:
-        for problem in args.problems:
-            for n in args.sizes or SIZES[problem]:
-                if 2 * n * n > args.max_elements:
-                    print(f"{problem:>13} n = {n}: skipped, {2 * n * n} elements > --max-elements")
-                    continue
-                progress = Path(scratch) / f"{problem}-{n}.jsonl"
-                progress.write_text("")
-                command = [
-                    sys.executable,
-                    __file__,
-                    "--one",
-                    problem,
-                    str(n),
-                    "--linear-solver",
-                    args.linear_solver,
-                    "--progress",
-                    str(progress),
-                ]
-                if args.max_iterations:
-                    command += ["--max-iterations", str(args.max_iterations)]
-                try:
-                    done = subprocess.run(
-                        command,
-                        capture_output=True,
-                        text=True,
-                        check=False,
-                        timeout=args.time_limit,
-                    )
-                except subprocess.TimeoutExpired:
-                    row = stopped_row(progress, args.time_limit)
-                    if row is None:
-                        print(f"{problem:>13} n = {n}: stopped after {args.time_limit:.0f} s")
-                    else:
-                        rows.append(row)
-                        print_row(row)
-                    continue
-                if done.returncode != 0:
-                    print(f"{problem:>13} n = {n}: failed\n{done.stderr.strip()[-2000:]}")
-                    continue
-                row = json.loads(done.stdout.strip().splitlines()[-1])
-                rows.append(row)
-                print_row(row)
+        for problem, n in runs:
+            if 2 * n * n > args.max_elements:
+                print(f"{problem:>13} n = {n}: skipped, {2 * n * n} elements > --max-elements")
+                continue
+            progress = Path(scratch) / f"{problem}-{n}.jsonl"
+            progress.write_text("")
+            command = [
+                sys.executable,
+                __file__,
+                "--one",
+                problem,
+                str(n),
+                "--linear-solver",
+                args.linear_solver,
+                "--progress",
+                str(progress),
+            ]
+            if args.max_iterations:
+                command += ["--max-iterations", str(args.max_iterations)]
+            try:
+                done = subprocess.run(
+                    command,
+                    capture_output=True,
+                    text=True,
+                    check=False,
+                    timeout=args.time_limit,
+                )
+            except subprocess.TimeoutExpired:
+                row = stopped_row(progress, args.time_limit)
+                if row is None:
+                    print(f"{problem:>13} n = {n}: stopped after {args.time_limit:.0f} s")
+                else:
+                    rows.append(row)
+                    print_row(row)
+                continue
+            if done.returncode != 0:
+                print(f"{problem:>13} n = {n}: failed\n{done.stderr.strip()[-2000:]}")
+                continue
+            row = json.loads(done.stdout.strip().splitlines()[-1])
+            rows.append(row)
+            print_row(row)
     write_csv(args.csv, rows, FIELDS)
 
 

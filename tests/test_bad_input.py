@@ -433,6 +433,26 @@ MORE = [
     ("refine negative", replace(R, R + "\nrefine = -1"), "'refine'"),
     ("refine float", replace(R, R + "\nrefine = 1.5"), "'refine'"),
     ("units a number", replace(R, R + "\nunits = 3"), "'units' must be a string or a table"),
+    (
+        "levels a string",
+        chain(replace(R, R + '\nlevels = "coarse.msh"'), append("[solver]\nnested = true")),
+        "[mesh]: 'levels' must be a list of mesh files",
+    ),
+    (
+        "levels of numbers",
+        chain(replace(R, R + "\nlevels = [1, 2]"), append("[solver]\nnested = true")),
+        "[mesh]: 'levels' must be a list of mesh files",
+    ),
+    (
+        "levels without nested",
+        replace(R, R + '\nlevels = ["coarse.msh"]'),
+        "[mesh]: 'levels' are the meshes of [solver] nested: set nested = true",
+    ),
+    (
+        "level file missing",
+        chain(replace(R, R + '\nlevels = ["nowhere.msh"]'), append("[solver]\nnested = true")),
+        "[mesh]: levels[0]: mesh file",
+    ),
     # [material]
     (
         "material not a table",
@@ -582,7 +602,7 @@ MORE = [
     ("max_step 2", append("[solver]\nmax_step = 2.0"), "max_step"),
     ("max_step below min_step", append("[solver]\nmin_step = 0.5\nmax_step = 0.1"), "max_step"),
     ("target_iterations negative", append("[solver]\ntarget_iterations = -1"), "target_iterations"),
-    ("nested without refine", append("[solver]\nnested = true"), "nested"),
+    ("nested without refine", append("[solver]\nnested = true"), "refine >= 1 or [mesh] levels"),
     ("nested text", append('[solver]\nnested = "yes"'), "nested"),
     ("convergence unknown", append('[solver]\nconvergence = "energy"'), "unknown convergence"),
     ("convergence a number", append("[solver]\nconvergence = 1"), "convergence"),
@@ -598,6 +618,53 @@ MORE = [
 
 @pytest.mark.parametrize("name, edit, fragment", MORE, ids=[row[0] for row in MORE])
 def test_every_key_refuses_its_bad_values(tmp_path, capsys, name, edit, fragment):
+    test_bad_input_exits_2_with_one_line(tmp_path, capsys, name, edit, fragment)
+
+
+def nested_on(*files):
+    return chain(
+        replace(R, R + f"\nlevels = {list(files)!r}".replace("'", '"')),
+        append("[solver]\nnested = true"),
+    )
+
+
+# [mesh] levels with mesh files beside the case (written by the test below): sheet-2.vtu,
+# the unit square in 2 elements; sheet-4.vtu in 4; sheet-32.vtu in 32 (the case: 8); half.vtu,
+# the half 0 <= x <= 0.5 of the square; garbage.vtu, not a mesh
+LEVELS = [
+    ("level finer than the case", nested_on("sheet-32.vtu"), "levels[0]: "),
+    ("level finer than the case says so", nested_on("sheet-32.vtu"), "not fewer than the case's"),
+    ("levels out of order", nested_on("sheet-4.vtu", "sheet-2.vtu"), "not fewer than sheet-2.vtu"),
+    ("level unreadable", nested_on("garbage.vtu"), "levels[0]: mesh file"),
+    (
+        "physical group missing on a level",
+        chain(nested_on("sheet-2.vtu"), replace('nodes = "y == 0"', 'nodes = "bottom"')),
+        "unknown name 'bottom'",
+    ),
+    (
+        "the level file named",
+        chain(nested_on("sheet-2.vtu"), replace('nodes = "y == 0"', 'nodes = "bottom"')),
+        "(on the mesh of [mesh] levels: ",
+    ),
+    ("level of another surface", nested_on("half.vtu"), "do not cover the same surface"),
+    ("level of another surface named", nested_on("half.vtu"), "half.vtu, level 1: the case's"),
+]
+
+
+@pytest.mark.parametrize("name, edit, fragment", LEVELS, ids=[row[0] for row in LEVELS])
+def test_bad_levels(tmp_path, capsys, name, edit, fragment):
+    import meshio
+
+    from wrinkle import rectangle
+
+    for file, mesh in [
+        ("sheet-2.vtu", rectangle(1.0, 1.0, 1, 1)),
+        ("sheet-4.vtu", rectangle(1.0, 1.0, 2, 1)),
+        ("sheet-32.vtu", rectangle(1.0, 1.0, 4, 4)),
+        ("half.vtu", rectangle(0.5, 1.0, 1, 1)),
+    ]:
+        meshio.write_points_cells(str(tmp_path / file), mesh.nodes, [("triangle", mesh.triangles)])
+    (tmp_path / "garbage.vtu").write_text("garbage")
     test_bad_input_exits_2_with_one_line(tmp_path, capsys, name, edit, fragment)
 
 

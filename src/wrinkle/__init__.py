@@ -15,6 +15,7 @@ from wrinkle.refinement import refine, refined
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import select_nodes
 from wrinkle.solvers import ConvergenceError, SolverSettings
+from wrinkle.transfer import PointTransfer
 from wrinkle.wrinkling import Wrinkling
 
 try:
@@ -29,6 +30,7 @@ __all__ = [
     "Mesh",
     "Model",
     "NeoHookean",
+    "PointTransfer",
     "Results",
     "SolverSettings",
     "StVenantKirchhoff",

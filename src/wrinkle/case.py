@@ -209,7 +209,8 @@ class Case:
     {"length": "m", "force": "N"} for the summary and the pictures; source: the case file;
     title: its ``title``; verification: its [verification] table (read by the verification
     gallery only); coarse: with ``[solver] nested``, the same case on the coarser meshes of
-    ``[mesh] refine``, coarsest first (``wrinkle.sequencing``).
+    ``[mesh] levels`` and ``[mesh] refine``, coarsest first (``wrinkle.sequencing``);
+    level_names: what each of them is (a level's file, "[mesh] refine = i"), for messages.
     """
 
     model: Model
@@ -220,6 +221,7 @@ class Case:
     title: str = ""
     verification: dict[str, Any] = field(default_factory=dict)
     coarse: list[Model] = field(default_factory=list)
+    level_names: list[str] = field(default_factory=list)
 
     def _label(self, results: Results | None) -> None:
         if results is not None:
@@ -243,7 +245,11 @@ class Case:
         except ValueError as error:  # the model's checks (supports, scale): name the file
             if isinstance(error, CaseError) or self.source is None:
                 raise
-            raise CaseError(f"{self.source}: {error}") from None
+            message = str(error)
+            if message.startswith("nested:") and self.level_names:  # say which level is which
+                names = [*self.level_names, "the case's own mesh"]
+                message += " (" + ", ".join(f"level {i}: {n}" for i, n in enumerate(names)) + ")"
+            raise CaseError(f"{self.source}: {message}") from None
         self._label(results)
         return results
 
@@ -301,7 +307,7 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
         {"support", "load", "probe", "solver", "title", "verification"},
     )
 
-    base, times, units = _read_mesh(reader, data["mesh"], path.parent)
+    base, times, units, level_files = _read_mesh(reader, data["mesh"], path.parent)
     if base.n_elements * 4**times > MAX_REFINED_ELEMENTS:
         count = float(base.n_elements) * 4.0 ** min(times, 400)  # formattable however large
         reader.fail(
@@ -327,22 +333,36 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
             reader.fail(where, f"probe name {str(name)!r} is used twice (each probe needs its own)")
         probes[str(name)] = reader.nodes(mesh, table, where)
     settings = _read_solver(reader, data.get("solver", {}))
-    coarse = []
+    coarse, level_names = [], []
+    if level_files and not settings.nested:
+        reader.fail(
+            "[mesh]", "'levels' are the meshes of [solver] nested: set nested = true to use them"
+        )
     if settings.nested:
-        if times == 0:
-            reader.fail("[solver]", "'nested' needs coarser meshes: set [mesh] refine >= 1")
+        if times == 0 and not level_files:
+            reader.fail(
+                "[solver]",
+                "'nested' needs coarser meshes: set [mesh] refine >= 1 or [mesh] levels",
+            )
+        for level_file, level_mesh in _read_levels(reader, level_files, base):
+            try:
+                coarse.append(_read_model(reader, data, level_mesh))
+            except CaseError as error:
+                raise CaseError(f"{error} (on the mesh of [mesh] levels: {level_file})") from None
+            level_names.append(str(level_file))
         for level, level_mesh in enumerate(meshes[:-1]):
             try:
                 coarse.append(_read_model(reader, data, level_mesh))
             except CaseError as error:
                 raise CaseError(f"{error} (on the mesh of [mesh] refine = {level})") from None
+            level_names.append(f"[mesh] refine = {level}")
     title = data.get("title", "")
     if not isinstance(title, str):
         reader.fail("top level", f"'title' must be a string, got {title!r}")
     verification = data.get("verification", {})
     if not isinstance(verification, dict):
         reader.fail("[verification]", "must be a table")
-    return Case(model, settings, probes, units, path, title, verification, coarse)
+    return Case(model, settings, probes, units, path, title, verification, coarse, level_names)
 
 
 def _read_model(reader: _Reader, data: dict, mesh: Mesh) -> Model:
@@ -372,13 +392,36 @@ def _read_model(reader: _Reader, data: dict, mesh: Mesh) -> Model:
     return model
 
 
-def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, int, dict]:
-    """The mesh before refinement, how many times [mesh] refine splits it, and the units."""
+def _read_levels(reader: _Reader, files: list[Path], base: Mesh) -> list[tuple[Path, Mesh]]:
+    """The meshes of [mesh] levels, each with its file, coarsest first: each with fewer
+    elements than the next, the last fewer than the base mesh (before [mesh] refine)."""
+    levels = []
+    for index, file in enumerate(files):
+        try:
+            levels.append((file, read_mesh(file)))
+        except (ValueError, ImportError, OSError) as error:
+            reader.fail("[mesh]", f"levels[{index}]: {error}")
+    counts = [mesh.n_elements for _, mesh in levels] + [base.n_elements]
+    for index, (file, _) in enumerate(levels):
+        if counts[index] >= counts[index + 1]:
+            finer = files[index + 1].name if index + 1 < len(files) else "the case's own mesh"
+            reader.fail(
+                "[mesh]",
+                f"levels[{index}]: {file} has {counts[index]:,} elements, not fewer than "
+                f"{finer} ({counts[index + 1]:,}): list the levels coarsest first, each "
+                "coarser than the next",
+            )
+    return levels
+
+
+def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, int, dict, list[Path]]:
+    """The mesh before refinement, how many times [mesh] refine splits it, the units and the
+    files of [mesh] levels (not read yet)."""
     where = "[mesh]"
     if not isinstance(table, dict):
         reader.fail(where, "must be a table")
     sources = [key for key in ("file", *GENERATORS) if key in table]
-    reader.keys(table, where, set(), {"file", "units", "refine", *GENERATORS})
+    reader.keys(table, where, set(), {"file", "units", "refine", "levels", *GENERATORS})
     if len(sources) != 1:
         reader.fail(where, "give exactly one of 'file', " + ", ".join(f"'{g}'" for g in GENERATORS))
     units = {}
@@ -396,10 +439,18 @@ def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, int, d
     times = 0
     if "refine" in table:
         times = int(reader.number(table, "refine", where, integer=True, minimum=0))
+    levels = table.get("levels", [])
+    if not isinstance(levels, list) or not all(isinstance(item, str) for item in levels):
+        reader.fail(
+            where,
+            f"'levels' must be a list of mesh files, coarsest first, such as "
+            f'["coarse.msh", "medium.msh"], got {levels!r}',
+        )
+    level_files = [folder / item for item in levels]
     try:
         if source == "file":
             file = folder / reader.string(table, "file", where)
-            return read_mesh(file), times, units
+            return read_mesh(file), times, units, level_files
         generator, keys = GENERATORS[source]
         parameters = table[source]
         sub = f"[mesh] {source}"
@@ -417,7 +468,7 @@ def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, int, d
             reader.number(parameters, key, sub, positive=True, integer=key.startswith("n"))
             for key in keys
         ]
-        return generator(*values), times, units
+        return generator(*values), times, units, level_files
     except CaseError:
         raise
     except (ValueError, ImportError, OSError) as error:

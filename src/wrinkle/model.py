@@ -499,19 +499,22 @@ class Model:
         last two converged states (u0 being the state at load factor 0) or, if it moves
         supports, from the tangent prediction, where that is closer to balance.
         ``on_step(step_result)`` is called after each converged step. coarse: models of
-        coarser meshes, coarsest first, each refined once being the next (the last: this
-        model's mesh), from which the first step starts (``wrinkle.sequencing``): used, and
-        needed, by ``nested=True``, from the reference state only (u0 None). probes: {name:
-        node indices} watched, with every displacement and the reactions, by the accuracy
-        stop (``convergence="accuracy"``) on the finer levels of a nested first step. Raises
+        coarser meshes of the same reference surface, coarsest first, each with fewer
+        elements than the next and the last fewer than this model's (nested by refinement or
+        not: ``wrinkle.sequencing.level_transfer``), from which the first step starts: used,
+        and needed, by ``nested=True``, from the reference state only (u0 None). probes:
+        {name: node indices} watched, with every displacement and the reactions, by the
+        accuracy stop (``convergence="accuracy"``) on the finer levels of a nested first
+        step. Raises
         ConvergenceError, with the converged steps in its ``results`` attribute, if a step
-        cannot be solved; ValueError for a bad setting or unrestrained rigid-body motion.
+        cannot be solved; ValueError for a bad setting, unrestrained rigid-body motion or a
+        coarse model not coarser than the next or off its surface.
         """
         settings = (settings or SolverSettings()).replace(**options)
         if settings.nested and not coarse:
             raise ValueError(
                 "nested needs the models of the coarser meshes (coarse=...); a case file makes "
-                "them from [mesh] refine"
+                "them from [mesh] refine or [mesh] levels"
             )
         self.check_supports()
         system = self.discretise()

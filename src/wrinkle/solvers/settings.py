@@ -82,7 +82,7 @@ class SolverSettings:
     look_ahead (if the first step fails, solve the end of the path first and the levels below
     it downwards, before cutting back); nested: start the first load step from the solution of
     coarser meshes (``Model.solve``'s ``coarse``; a case file makes them from ``[mesh]
-    refine``). convergence: "residual", or "accuracy" to let the accuracy stop
+    refine`` and ``[mesh] levels``). convergence: "residual", or "accuracy" to let the accuracy stop
     (``wrinkle.solvers.stopping``) end the solves of the finer levels of a nested first
     step, with accuracy_energy (eta, the fraction of the discretisation error of the energy
     that may remain) and accuracy_change (the largest remaining change of a probe or

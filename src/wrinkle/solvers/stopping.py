@@ -5,9 +5,12 @@ In the spirit of Ern & Vohralik (SIAM J. Sci. Comput. 35, 2013: stop the lineari
 its error estimate is below a fraction of the discretisation error estimate). On a level h of
 a mesh sequence whose coarser level H converged at the same load with energy Pi_H:
 
-- the discretisation error of the energy is estimated as D = (Pi_H - Pi_h(u_k)) / 3, which
-  is what it would be if the error fell like h^2, the fastest linear elements allow (slower
-  convergence makes the true error larger than D, so the rule errs on the side of going on);
+- the discretisation error of the energy is estimated as D = (Pi_H - Pi_h(u_k)) / (r - 1),
+  with r the ratio of the levels' element counts (4 for a refinement: D = (Pi_H - Pi_h) / 3),
+  which is what it would be if the error fell like h^2 ~ 1 / (number of elements), the
+  fastest linear elements allow (slower convergence makes the true error larger than D, so
+  the rule errs on the side of going on; a level whose energy is not below the coarser one's,
+  as independent meshes may give, has D <= 0 and never stops early);
 - the energy still to be gained is estimated from the accepted steps' actual decreases
   a_j = Pi(u_(j-1)) - Pi(u_j): with q the largest ratio a_j / a_(j-1) over the last
   ``window`` steps, the rest of a sequence that contracts by q is G = a_k q / (1 - q);
@@ -43,7 +46,6 @@ __all__ = ["MAX_RESIDUAL", "AccuracyStop", "Quantities"]
 # solve: the loosest tolerance a residual test accepts (``settings.MAX_TOLERANCE``)
 MAX_RESIDUAL = 1e-2
 _GOOD_GAIN = 0.75  # a step whose gain ratio is at least this followed its quadratic model
-_ORDER_FACTOR = 3.0  # 2^2 - 1: the energy error of linear elements falls at most like h^2
 
 # quantities of an iterate: (names, values, scales), the scales in the values' units
 Quantities = Callable[[np.ndarray, Evaluation], tuple[list[str], np.ndarray, np.ndarray]]
@@ -57,7 +59,8 @@ class AccuracyStop:
     quantities: the quantities of interest of an iterate (``Quantities``); energy: eta, the
     fraction of the discretisation error the energy still to be gained may be; change: the
     largest remaining change of a quantity, relative to its scale; window: the number of
-    last steps that must all be good (>= 2).
+    last steps that must all be good (>= 2); order_factor: r - 1, r the ratio of the
+    levels' element counts (3 for a mesh refined once).
     """
 
     coarse_energy: float
@@ -65,6 +68,7 @@ class AccuracyStop:
     energy: float = 0.1
     change: float = 1e-4
     window: int = 3
+    order_factor: float = 3.0
     _energies: list[float] = field(default_factory=list)
     _good: list[bool] = field(default_factory=list)
     _values: np.ndarray | None = None
@@ -73,6 +77,8 @@ class AccuracyStop:
     def __post_init__(self) -> None:
         if self.window < 2:
             raise ValueError(f"accuracy stop: window must be >= 2, got {self.window}")
+        if not self.order_factor > 0:
+            raise ValueError(f"accuracy stop: order_factor must be > 0, got {self.order_factor}")
 
     def __call__(self, step: AcceptedStep) -> dict[str, Any] | None:
         """The report of the numbers decided on if the solve may stop at ``step``, else None
@@ -96,7 +102,7 @@ class AccuracyStop:
         if q >= 1.0:
             return None
         gap = float(decreases[-1]) * q / (1.0 - q)
-        discretisation = (self.coarse_energy - step.energy) / _ORDER_FACTOR
+        discretisation = (self.coarse_energy - step.energy) / self.order_factor
         if not gap <= self.energy * discretisation:
             return None
         root = math.sqrt(q)
