@@ -143,18 +143,25 @@ def write_vtu(mesh: Mesh, path: Path) -> str:
     return path.name
 
 
+def airbag_with_levels(tmp_path, counts):
+    """Jittered n x n meshes of the quarter airbag's square written as .vtu files, one per
+    n of counts, and a copy of the airbag case beside them: (file names, case path)."""
+    side = 0.6 * np.sqrt(2.0) / 2.0
+    files = [
+        write_vtu(jittered(rectangle(side, side, n, n), n), tmp_path / f"level-{n}.vtu")
+        for n in counts
+    ]
+    case = tmp_path / "airbag.toml"
+    case.write_text(AIRBAG.read_text())
+    return files, case
+
+
 def test_airbag_through_levels_of_other_meshes_reaches_the_same_equilibrium(tmp_path):
     """The bending airbag on 512 elements, started from jittered meshes of 72 and 200
     elements ([mesh] levels, .vtu files beside the case): the same centre deflection as the
     solve from the flat sheet, to the convergence test (1e-8 of the force scale), in fewer
     iterations (measured: 11 against 21)."""
-    side = 0.6 * np.sqrt(2.0) / 2.0
-    files = [
-        write_vtu(jittered(rectangle(side, side, n, n), n), tmp_path / f"level-{n}.vtu")
-        for n in (6, 10)
-    ]
-    case = tmp_path / "airbag.toml"
-    case.write_text(AIRBAG.read_text())
+    files, case = airbag_with_levels(tmp_path, (6, 10))
     mesh = {"rectangle": {"nx": 16, "ny": 16}}
     flat = read_case(case, {"mesh": mesh, "material": {"bending": True}})
     nested = read_case(
@@ -178,13 +185,7 @@ def test_airbag_through_levels_of_other_meshes_reaches_the_same_equilibrium(tmp_
 def test_levels_come_before_the_refined_meshes(tmp_path):
     """[mesh] levels with refine = 1: the coarse models are the levels' and then the base
     mesh's, coarsest first; the case's own is the base refined once."""
-    side = 0.6 * np.sqrt(2.0) / 2.0
-    files = [
-        write_vtu(jittered(rectangle(side, side, n, n), n), tmp_path / f"sheet-{n}.vtu")
-        for n in (2, 3)
-    ]
-    case = tmp_path / "airbag.toml"
-    case.write_text(AIRBAG.read_text())
+    files, case = airbag_with_levels(tmp_path, (2, 3))
     read = read_case(
         case,
         {

@@ -74,10 +74,11 @@ class SuperLU(_FreedWithTheObject):
 
     name = "superlu"
 
-    def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
-        """LU of A (real or complex); None if it is exactly singular."""
+    @staticmethod
+    def _lu(A: sp.csr_matrix) -> spla.SuperLU | None:
+        """The factorisation of the class docstring; None if A is exactly singular."""
         try:
-            lu = spla.splu(
+            return spla.splu(
                 A.tocsc(),
                 permc_spec="MMD_AT_PLUS_A",
                 diag_pivot_thresh=0.0,
@@ -86,22 +87,19 @@ class SuperLU(_FreedWithTheObject):
         except RuntimeError as error:  # "Factor is exactly singular"
             logger.debug("factorisation failed: %s", error)
             return None
-        return lu.solve
+
+    def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
+        """LU of A (real or complex); None if it is exactly singular."""
+        lu = self._lu(A)
+        return None if lu is None else lu.solve
 
     def negative_pivots(self, A: sp.csr_matrix) -> int | None:
         """The number of negative eigenvalues of the symmetric matrix A (its inertia, by
         Sylvester's law from the pivots of the symmetric factorisation P A P^T = L D L^T
         that diagonal pivoting with one ordering of rows and columns gives); None if A is
         singular or the pivots left the diagonal."""
-        try:
-            lu = spla.splu(
-                A.tocsc(),
-                permc_spec="MMD_AT_PLUS_A",
-                diag_pivot_thresh=0.0,
-                options={"SymmetricMode": True},
-            )
-        except RuntimeError as error:
-            logger.debug("factorisation failed: %s", error)
+        lu = self._lu(A)
+        if lu is None:
             return None
         if not np.array_equal(lu.perm_r, lu.perm_c):
             return None
