@@ -256,7 +256,7 @@ def _from_the_end(
     timer: Stopwatch | None,
     first_guess: FirstGuess | None,
     first_stop: FirstStop | None,
-    stability: tuple[RegularisedSolver, np.ndarray] | None,
+    stability: bool,
 ) -> list[Level] | None:
     """The look-ahead after a failed first step: the end of the path (load factor 1) solved
     from the start u, then the levels below it (``descend``); None if either fails or the
@@ -278,7 +278,7 @@ def _from_the_end(
     if levels is None:
         logger.info("a step down from the end of the path failed; cutting the first step back")
         return None
-    beyond = _checked_levels(levels, u, stability)
+    beyond = _checked_levels(system, levels, u, solver if stability else None, timer)
     if beyond is not None:
         logger.info("the levels from the end of the path are past a limit point: %s", beyond)
         return None
@@ -348,14 +348,17 @@ def _check_state(
     solved: SolverResult,
     factor: float,
     slope: PathSlope,
-    stability: tuple[RegularisedSolver, np.ndarray] | None,
+    stability: tuple[RegularisedSolver, SteppedProblem] | None,
 ) -> None:
     """Raise PastALimit if the state a step reached at load factor ``factor`` jumped across
-    a limit point (``PathSlope.jump``) or, with ``stability`` (the solver and the free
-    components), is unstable (``wrinkle.solvers.stability``)."""
+    a limit point (``PathSlope.jump``) or, with ``stability`` (the solver and the step's
+    problem), is unstable (``wrinkle.solvers.stability``)."""
     if stability is not None:
-        solver, free = stability
-        count = unstable_modes(solver, solved.evaluation, free)
+        solver, problem = stability
+        ev = solved.evaluation
+        if ev.stiffness is None:  # a start already in balance: evaluated without it
+            ev = try_evaluate(problem, solved.u) or ev
+        count = None if ev.stiffness is None else unstable_modes(solver, ev, problem.free)
         if count:
             raise PastALimit(
                 f"the state reached at load factor {factor:.6g} is unstable: its tangent has "
@@ -368,16 +371,22 @@ def _check_state(
 
 
 def _checked_levels(
+    system: LoadLevels,
     levels: list[Level],
     u0: np.ndarray,
-    stability: tuple[RegularisedSolver, np.ndarray] | None,
+    stability: RegularisedSolver | None,
+    timer: Stopwatch | None,
 ) -> str | None:
     """Why the levels (increasing load factor, from the start u0 at load factor 0) are not
-    a path that load control may report (``_check_state``), or None if they are."""
+    a path that load control may report (``_check_state``; stability: the solver, to check
+    each state's stability), or None if they are."""
     slope = PathSlope(u0)
     for factor, u, solved in levels:
+        checks = None
+        if stability is not None:
+            checks = (stability, _problem_at(system, factor, timer))
         try:
-            _check_state(solved, factor, slope, stability)
+            _check_state(solved, factor, slope, checks)
         except PastALimit as error:
             return str(error)
         slope.record(factor, u)
@@ -455,7 +464,7 @@ def follow_load_path(
             trusted = predicted is not None
             if trusted and first_stop is not None:
                 stop = first_stop(trial_factor)
-        checks = (solver, problem.free) if stability else None
+        checks = (solver, problem) if stability else None
         try:
             solved = solve_step(problem, u, solver, predicted=predicted, trusted=trusted, stop=stop)
             _check_state(solved, trial_factor, slope, checks)
@@ -465,7 +474,7 @@ def follow_load_path(
             elif previous is None and not looked_ahead:
                 looked_ahead = True
                 levels = _from_the_end(
-                    system, solver, controller, u, timer, first_guess, first_stop, checks
+                    system, solver, controller, u, timer, first_guess, first_stop, stability
                 )
                 if levels is not None:
                     for level in levels:
