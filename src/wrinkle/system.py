@@ -698,5 +698,5 @@ class StepProblem:
             pattern.diagonal,
             self.metric,
             reactions,
-            system.inadmissible(x),
+            lambda: system.inadmissible(system.element_coordinates(u)),
         )

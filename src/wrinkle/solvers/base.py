@@ -64,8 +64,9 @@ class Evaluation:
         None for the identity.
     reactions: (n_dofs,) internal minus external force at the constrained dofs, zero
         elsewhere (the support reactions), if the problem gives them.
-    inadmissible: why the state is not a physical one (collapsed elements or enclosed
-        volume), or None; a solve never ends on such a state.
+    admissibility: a function giving why the state is not a physical one (collapsed
+        elements or enclosed volume), or None if it is one; called only for a balanced state
+        (``inadmissible``), not for every trial point. None: every state is physical.
     """
 
     residual: np.ndarray
@@ -78,7 +79,13 @@ class Evaluation:
     diagonal: np.ndarray | None = None
     metric: np.ndarray | None = None
     reactions: np.ndarray | None = None
-    inadmissible: str | None = None
+    admissibility: Callable[[], str | None] | None = None
+
+    @property
+    def inadmissible(self) -> str | None:
+        """Why the state is not a physical one, or None (``admissibility``); a solve never
+        ends on such a state."""
+        return None if self.admissibility is None else self.admissibility()
 
     @property
     def residual_norm(self) -> float:
@@ -377,10 +384,10 @@ class RegularisedSolver(ABC):
     def _refuse_inadmissible(self, ev: Evaluation, history: list[float]) -> None:
         """Raise ConvergenceError if the balanced state of ev is not a physical one: a solve
         must not end there (``Evaluation.inadmissible``)."""
-        if ev.inadmissible is not None:
+        reason = ev.inadmissible
+        if reason is not None:
             raise InadmissibleState(
-                f"{self.method}: the balanced state is not admissible: {ev.inadmissible}",
-                history,
+                f"{self.method}: the balanced state is not admissible: {reason}", history
             )
 
     def solve(

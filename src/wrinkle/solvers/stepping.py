@@ -299,19 +299,21 @@ class PathSlope:
         self.relative: list[float] = []  # each converged step's slope over the first's
         self._first: float | None = None
 
-    def _relative(self, factor: float, u: np.ndarray) -> float | None:
+    def _slope(self, factor: float, u: np.ndarray) -> float | None:
+        """dlambda / |du| of a step from the last recorded state to (factor, u), or None
+        where it moved nothing or the load did not grow."""
         moved = float(np.linalg.norm(u - self._u))
         if not (moved > 0.0 and factor > self._factor):
             return None
-        slope = (factor - self._factor) / moved
-        return 1.0 if self._first is None else slope / self._first
+        return (factor - self._factor) / moved
 
     def jump(self, factor: float, u: np.ndarray) -> str | None:
         """How a step to ``factor`` with displacements u (n_dofs,) jumped across a limit
         point, or None if it did not."""
-        relative = self._relative(factor, u)
-        if relative is None or not self.relative:
+        slope = self._slope(factor, u)
+        if slope is None or self._first is None or not self.relative:
             return None
+        relative = slope / self._first
         if relative < LIMIT_SLOPE and relative * JUMP < self.relative[-1]:
             return (
                 f"the step from load factor {self._factor:.6g} to {factor:.6g} jumped to "
@@ -322,9 +324,8 @@ class PathSlope:
 
     def record(self, factor: float, u: np.ndarray) -> None:
         """A converged step to ``factor`` with displacements u (n_dofs,), accepted."""
-        moved = float(np.linalg.norm(u - self._u))
-        if moved > 0.0 and factor > self._factor:
-            slope = (factor - self._factor) / moved
+        slope = self._slope(factor, u)
+        if slope is not None:
             if self._first is None:
                 self._first = slope
             self.relative.append(slope / self._first)
