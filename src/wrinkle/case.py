@@ -20,6 +20,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 
+from wrinkle.gas import Gas
 from wrinkle.materials import NeoHookean, StVenantKirchhoff
 from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh, annulus, check_fits, cylinder, disk, read_mesh, rectangle, sphere
@@ -29,7 +30,7 @@ from wrinkle.refinement import MAX_REFINED_ELEMENTS, refine
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import evaluate_expression, select_nodes
 from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS, ConvergenceError, SolverSettings
-from wrinkle.solvers.settings import CONVERGENCE_TESTS
+from wrinkle.solvers.settings import CONTROLS, CONVERGENCE_TESTS
 
 __all__ = [
     "GENERATORS",
@@ -65,6 +66,7 @@ LOAD_KINDS = {
     "edge": ({"nodes"}, {"traction", "normal", "follow"}),
     "nodal": ({"nodes", "force"}, set()),
     "gravity": ({"acceleration", "density"}, {"region"}),
+    "gas": ({"ambient"}, {"p0", "amount", "gamma", "region"}),
 }
 SOLVER_KEYS = {
     "method",
@@ -82,6 +84,10 @@ SOLVER_KEYS = {
     "convergence",
     "accuracy_energy",
     "accuracy_change",
+    "control",
+    "volume_ratio",
+    "volume",
+    "stop",
 }
 
 
@@ -284,7 +290,8 @@ class Case:
             with contextlib.suppress(OSError):  # the summary may not be writable either
                 writer.finish(False, f"stopped: {error}")
             raise
-        writer.finish(True, "converged to load factor 1")
+        end = results.end
+        writer.finish(True, "converged to load factor 1" if end is None else end.message)
         return results
 
 
@@ -333,6 +340,13 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
             reader.fail(where, f"probe name {str(name)!r} is used twice (each probe needs its own)")
         probes[str(name)] = reader.nodes(mesh, table, where)
     settings = _read_solver(reader, data.get("solver", {}))
+    if settings.stop is not None and settings.stop[0] not in probes:
+        reader.fail(
+            "[solver]",
+            f"'stop' names probe {settings.stop[0]!r}, which no [[probe]] defines (probes: "
+            + (", ".join(probes) or "none")
+            + ")",
+        )
     coarse, level_names = [], []
     if level_files and not settings.nested:
         reader.fail(
@@ -588,6 +602,13 @@ def _read_load(reader: _Reader, model: Model, table: dict, where: str) -> None:
             model.add_nodal_force(
                 reader.nodes(mesh, table, where), reader.vector(table, "force", where)
             )
+        elif kind == "gas":
+            values = {
+                key: float(reader.number(table, key, where, positive=True))
+                for key in ("ambient", "p0", "amount", "gamma")
+                if key in table
+            }
+            model.add_gas(Gas(**values), reader.elements(mesh, table, where))
         elif kind == "gravity":
             model.add_gravity(
                 reader.vector(table, "acceleration", where),
@@ -647,9 +668,25 @@ def _read_solver(reader: _Reader, table: dict) -> SolverSettings:
         "growth",
         "accuracy_energy",
         "accuracy_change",
+        "volume_ratio",
+        "volume",
     ):
         if key in table:
             solver[key] = float(reader.number(table, key, where, positive=True))
+    if "control" in table:
+        control = reader.string(table, "control", where)
+        if control not in CONTROLS:
+            reader.fail(where, f"unknown control '{control}' (one of {', '.join(CONTROLS)})")
+        solver["control"] = control
+    if "stop" in table:
+        stop = table["stop"]
+        if not isinstance(stop, dict) or set(stop) != {"probe", "displacement"}:
+            reader.fail(
+                where, f"'stop' must be {{probe = \"NAME\", displacement = VALUE}}, got {stop!r}"
+            )
+        probe = reader.string(stop, "probe", where + " stop")
+        displacement = reader.number(stop, "displacement", where + " stop", positive=True)
+        solver["stop"] = (probe, float(displacement))
     if "convergence" in table:
         test = reader.string(table, "convergence", where)
         if test not in CONVERGENCE_TESTS:

@@ -19,8 +19,10 @@ __all__ = [
     "edge_follower_forces",
     "pressure_forces",
     "pressure_volume",
+    "pressure_volume_gradient",
     "skew",
     "subtract_pressure_stiffness",
+    "unclosed_edges",
 ]
 
 
@@ -91,6 +93,30 @@ def pressure_volume(x: np.ndarray) -> np.ndarray:
     origin (a boundary held, or moving in a symmetry plane through the origin, sweeps none).
     """
     return np.einsum("ni,ni->n", x[:, 0], cross(x[:, 1], x[:, 2])) / 6.0
+
+
+def pressure_volume_gradient(x: np.ndarray) -> np.ndarray:
+    """Gradient of ``pressure_volume`` with respect to each node's coordinates, (n, 3 nodes,
+    3): d/dx1 [x1.(x2 x x3)]/6 = (x2 x x3)/6, and cyclically for x2 and x3."""
+    x1, x2, x3 = x[:, 0], x[:, 1], x[:, 2]
+    return np.stack([cross(x2, x3), cross(x3, x1), cross(x1, x2)], axis=1) / 6.0
+
+
+def unclosed_edges(
+    nodes: np.ndarray, triangles: np.ndarray, constrained: np.ndarray, tolerance: float
+) -> np.ndarray:
+    """Boundary edges of the surface ``triangles`` that leave its cone volume from the
+    origin (``pressure_volume``) something other than the volume it encloses: (m, 2) node
+    pairs. An edge closes the surface if both its nodes are held in all three components
+    (the edge cannot sweep volume), or if both lie in one coordinate plane through the origin
+    (|X_k| <= tolerance) with that component k held (a symmetry plane, in which the edge can
+    only move within the plane). nodes (n_nodes, 3) reference coordinates; constrained
+    (3 n_nodes,) bool."""
+    edges = boundary_edges(triangles)[0][:, :2]
+    held = constrained.reshape(-1, 3)[edges]  # (m, 2, 3)
+    in_plane = np.abs(nodes[edges]) <= tolerance  # (m, 2, 3)
+    closes = np.all(held, axis=(1, 2)) | np.any(np.all(held & in_plane, axis=1), axis=1)
+    return edges[~closes]
 
 
 def edge_dead_forces(length: np.ndarray, traction: np.ndarray) -> np.ndarray:

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike
 
 from wrinkle.assembly import DOFS_PER_NODE, SparsityPattern
 from wrinkle.bending import Bending, bending_stiffness, check_flat
+from wrinkle.gas import Gas
 from wrinkle.kinematics import (
     ReferenceGeometry,
     material_frame,
@@ -38,8 +39,18 @@ from wrinkle.post import support_reactions
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import select_nodes
 from wrinkle.sequencing import NestedStart
+from wrinkle.solvers.arc_length import follow_arc_length
 from wrinkle.solvers.base import ConvergenceError, SolverResult
-from wrinkle.solvers.settings import SolverSettings
+from wrinkle.solvers.bordered import ProbeDisplacement
+from wrinkle.solvers.control import (
+    EnclosedVolume,
+    GasEnergy,
+    PathEnd,
+    VolumeLagrangian,
+    follow_load_path_to,
+    follow_volume_path,
+)
+from wrinkle.solvers.settings import MAX_STEPS, SolverSettings
 from wrinkle.solvers.stepping import follow_load_path
 from wrinkle.system import DiscreteSystem, FollowerEdgeLoad, Loading
 from wrinkle.wrinkling import Wrinkling
@@ -127,6 +138,7 @@ class Model:
         self.forces = np.zeros(self.n_dofs)  # dead nodal forces at full load
         self.supports: list[Support] = []
         self.pressure = np.zeros(n)  # follower pressure at full load, per element
+        self.gas: Gas | None = None  # a gas load (add_gas): its pressure on the elements above
         self._edge_follower: list[FollowerEdgeLoad] = []
         self.bending = np.zeros(n)  # bending stiffness D per element (add_bending)
         self._bending: Bending | None = None  # kept until the bending stiffness changes
@@ -295,8 +307,31 @@ class Model:
         positive along the element normal (x2 - x1) x (x3 - x1), reached at load factor 1."""
         if not np.isfinite(value):
             raise ValueError("pressure must be finite")
+        if self.gas is not None:
+            raise ValueError("a model with a gas load can have no other pressure load")
         self.pressure[self._element_indices(elements)] += value
         self._changed()
+
+    def add_gas(self, gas: Gas, elements: ElementSelection = None) -> None:
+        """An enclosed gas (``wrinkle.gas.Gas``) on ``elements`` (None = all): its gauge
+        pressure, set by the volume they enclose, acts along the element normals as a
+        follower pressure does. One gas load per model, and no other pressure load; solved
+        under load control, the load factor pumping the gas in."""
+        if self.gas is not None or np.any(self.pressure):
+            raise ValueError("a model has at most one gas load and then no other pressure load")
+        self.pressure[self._element_indices(elements)] = 1.0  # the gauge pressure's factor
+        self.gas = gas
+        self._changed()
+
+    @property
+    def pressure_value(self) -> float | None:
+        """The value at load factor 1 of the pressure loads (the one of largest magnitude
+        where they differ), which the ``pressure`` of the results reports times the load or
+        pressure factor; 1 for a gas load (the factor is then its gauge pressure); None
+        without pressure."""
+        if not np.any(self.pressure):
+            return None
+        return float(self.pressure[np.argmax(np.abs(self.pressure))])
 
     def add_bending(
         self, stiffness: float | None = None, elements: ElementSelection = None
@@ -479,6 +514,112 @@ class Model:
             return f"largest nodal force {load_factor * force:.4g}"
         return f"load factor {load_factor:.4g}"
 
+    def _follow(
+        self,
+        system: DiscreteSystem,
+        settings: SolverSettings,
+        solver: Any,
+        u0: np.ndarray | None,
+        record: Callable[[float, np.ndarray, SolverResult], None],
+        results: Results,
+        first_guess: NestedStart | None,
+        probes: Mapping[str, np.ndarray] | None,
+    ) -> PathEnd:
+        """Follow the path ``settings.control`` names (``solve``), with the stop, a gas
+        load's law; returns how it ended. ValueError for a control or stop the model cannot
+        have."""
+        stop = None
+        if settings.stop is not None:
+            name, displacement = settings.stop
+            if not probes or name not in probes:
+                known = ", ".join(probes or {}) or "none"
+                raise ValueError(f"solver stop: no probe named {name!r} (probes: {known})")
+            stop = ProbeDisplacement(np.asarray(probes[name]), float(displacement))
+        timer, controller = results.stopwatch, settings.controller()
+        control = settings.control
+        if self.gas is not None or control == "volume":
+            what = "[[load]] kind = 'gas'" if self.gas is not None else "solver control = 'volume'"
+            if self.gas is not None and control != "load":
+                raise ValueError(f"{what}: a gas load is solved under control = 'load'")
+            open_surface = system.volume_closure()
+            if open_surface is not None:
+                raise ValueError(f"{what}: {open_surface}")
+            constraint_at = self._volume_constraints(system, settings, what)
+            return follow_volume_path(
+                system, solver, controller, constraint_at, record, u0, 0.0, timer, stop
+            )
+        if control == "arc-length":
+            if np.any(system.prescribed[system.constrained]):
+                raise ValueError(
+                    "solver control = 'arc-length': the loads alone may follow the load factor; "
+                    "the model prescribes displacements (use control = 'load')"
+                )
+            max_steps = settings.steps if stop is not None else MAX_STEPS
+            return follow_arc_length(system, solver, controller, record, max_steps, u0, timer, stop)
+        options: dict[str, Any] = {
+            "first_guess": first_guess,
+            "first_stop": None if first_guess is None else first_guess.stop,
+            "describe_load": self._describe_load,
+            "stability": system.encloses_volume,
+        }
+        if stop is not None:
+            return follow_load_path_to(
+                system, solver, controller, stop, record, u0, timer, **options
+            )
+        follow_load_path(system, solver, controller, u0=u0, on_step=record, timer=timer, **options)
+        return PathEnd("converged to load factor 1")
+
+    def _volume_constraints(
+        self, system: DiscreteSystem, settings: SolverSettings, what: str
+    ) -> Callable[[float], tuple[EnclosedVolume, GasEnergy | VolumeLagrangian]]:
+        """The equation of each path parameter t of volume control or a gas load
+        (``wrinkle.solvers.control``): the volume to enclose."""
+        initial = system.reference_volume
+        gas = self.gas
+        if gas is not None:
+            if gas.p0 is not None and not initial > 0:
+                raise ValueError(
+                    f"{what}: 'p0' needs a membrane that encloses a positive volume in its "
+                    f"reference state (it encloses {initial:.3g}); give 'amount' instead"
+                )
+            reference = max(initial, 0.0)
+
+            def gas_volume(t: float) -> tuple[EnclosedVolume, GasEnergy]:
+                at_ambient = gas.volume(t, reference, 0.0)[0]
+                constraint = EnclosedVolume(
+                    system,
+                    lambda mu: gas.volume(t, reference, mu),
+                    max(abs(initial), at_ambient),
+                    least_mu=-gas.ambient,
+                )
+                return constraint, GasEnergy(system, gas, t, reference)
+
+            return gas_volume
+        if settings.volume is not None:
+            final = float(settings.volume)
+        else:
+            if initial == 0.0:
+                raise ValueError(
+                    "solver volume_ratio: the membrane encloses no volume in its reference "
+                    "state (a flat sheet); give an absolute volume = V instead"
+                )
+            final = float(settings.volume_ratio or 1.0) * initial
+        scale = max(abs(initial), abs(final))
+        values = np.unique(self.pressure[self.pressure != 0])
+        if values.size != 1:
+            raise ValueError(
+                f"{what}: the pressure loads must have one value (the unknown pressure is "
+                f"their common factor), got {values.size} different values"
+            )
+        pressure = float(values[0])
+
+        def volume_at(t: float) -> tuple[EnclosedVolume, VolumeLagrangian]:
+            target = initial + t * (final - initial)
+            constraint = EnclosedVolume(system, lambda mu: (target, 0.0), scale)
+            return constraint, VolumeLagrangian(pressure, target)
+
+        return volume_at
+
     def solve(
         self,
         settings: SolverSettings | None = None,
@@ -524,24 +665,19 @@ class Model:
         if coarse and settings.nested and u0 is None:
             first_guess = NestedStart(coarse, self, settings, results.stopwatch, probes)
 
+        pressure_unknown = self.gas is not None or settings.control == "volume"
+
         def record(load_factor: float, u: np.ndarray, solved: SolverResult) -> None:
-            step = results.append(load_factor, u, solved)
+            # under volume control and gas loads the pressure factor is the solve's unknown
+            factor = getattr(solved, "mu", load_factor) if pressure_unknown else load_factor
+            step = results.append(load_factor, u, solved, pressure_factor=factor)
             if on_step is not None:
                 on_step(step)
 
         solver = settings.solver()
         try:
-            follow_load_path(
-                system,
-                solver,
-                settings.controller(),
-                u0=u0,
-                on_step=record,
-                timer=results.stopwatch,
-                first_guess=first_guess,
-                first_stop=None if first_guess is None else first_guess.stop,
-                describe_load=self._describe_load,
-                stability=system.encloses_volume,
+            results.end = self._follow(
+                system, settings, solver, u0, record, results, first_guess, probes
             )
         except ConvergenceError as error:
             error.results = results

@@ -162,6 +162,10 @@ class ResultWriter:
         self.case = str(case) if case is not None else None
         self.steps: list[dict] = []
         self.rows: list[list] = []
+        # the pressure column where the model has pressure loads, the enclosed volume where
+        # they enclose one (``DiscreteSystem.volume_closure``)
+        self.has_pressure = getattr(model, "pressure_value", None) is not None
+        self.has_volume = self.has_pressure and model.discretise().volume_closure() is None
         self.out_dir.mkdir(parents=True, exist_ok=True)
         pictures = {STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE}
         for old in self.out_dir.iterdir():
@@ -198,8 +202,19 @@ class ResultWriter:
         report = getattr(step, "stop_report", None)
         if report is not None:
             entry["accuracy_stop"] = {key: value for key, value in report.items() if key != "rule"}
+        extra: list[float | None] = []
+        for name, present in (
+            ("pressure", self.has_pressure),
+            ("enclosed_volume", self.has_volume),
+        ):
+            if present:
+                value = getattr(step, name, None)
+                number = None if value is None else float(value)
+                entry[name] = number
+                extra.append(number)
         self.steps.append(entry)
-        row = [index, float(step.load_factor), int(step.iterations), float(step.residual)]
+        row: list = [index, float(step.load_factor), int(step.iterations), float(step.residual)]
+        row += extra
         row += states
         for force in support_forces.values():
             row += force
@@ -255,7 +270,10 @@ class ResultWriter:
 
     def history_header(self) -> list[str]:
         """Column names of history.csv."""
-        header = ["step", "load_factor", "iterations", "residual", *STATE_NAMES]
+        header = ["step", "load_factor", "iterations", "residual"]
+        header += ["pressure"] if self.has_pressure else []
+        header += ["enclosed_volume"] if self.has_volume else []
+        header += STATE_NAMES
         for label in self.support_labels:
             header += [f"{label}_Fx", f"{label}_Fy", f"{label}_Fz"]
         for name in self.probes:
@@ -301,7 +319,10 @@ def save_results(
     writer = ResultWriter(out_dir, results.model, probes=probes, units=units, case=case)
     for step in results.steps:
         writer.write_step(step)
-    if results.steps and abs(results.steps[-1].load_factor - 1.0) <= 1e-12:
+    end = getattr(results, "end", None)
+    if end is not None:
+        writer.finish(end.complete, end.message)
+    elif results.steps and abs(results.steps[-1].load_factor - 1.0) <= 1e-12:
         writer.finish(True, "converged to load factor 1")
     else:
         reached = results.steps[-1].load_factor if results.steps else 0.0

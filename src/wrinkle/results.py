@@ -12,6 +12,7 @@ import numpy as np
 
 from wrinkle.output import save_results
 from wrinkle.solvers.base import SolverResult
+from wrinkle.solvers.control import PathEnd
 from wrinkle.timing import Stopwatch
 
 if TYPE_CHECKING:
@@ -27,7 +28,11 @@ class StepResult:
     reactions: (n_dofs,) internal minus external force, nonzero at the supports (force);
     states: (taut, wrinkled, slack) element counts; stopped_by: the test that ended the
     solve, "residual" or "accuracy" (``wrinkle.solvers.stopping``), with stop_report the
-    numbers the accuracy stop decided on.
+    numbers the accuracy stop decided on; pressure: the current value of the pressure loads
+    (their value times the load factor, or times the pressure factor that volume control
+    and gas loads solve for; None without pressure); enclosed_volume: the volume the
+    pressurised membrane encloses (``DiscreteSystem.enclosed_volume``), where it is closed
+    or closed by symmetry planes, else None.
     """
 
     load_factor: float
@@ -38,6 +43,8 @@ class StepResult:
     states: tuple[int, int, int]
     stopped_by: str = "residual"
     stop_report: dict[str, Any] | None = None
+    pressure: float | None = None
+    enclosed_volume: float | None = None
 
 
 class Results:
@@ -55,6 +62,8 @@ class Results:
         self.probes: dict[str, np.ndarray] = {}
         self.units: dict[str, str] = {}
         self.source: Path | None = None
+        self.end: PathEnd | None = None
+        self._closed: bool | None = None  # whether the pressurised surface encloses a volume
 
     @property
     def timings(self) -> dict[str, float]:
@@ -68,13 +77,25 @@ class Results:
         (``nested``) included."""
         return self.stopwatch.factorisations
 
-    def append(self, load_factor: float, u: np.ndarray, solved: SolverResult) -> StepResult:
+    def append(
+        self,
+        load_factor: float,
+        u: np.ndarray,
+        solved: SolverResult,
+        pressure_factor: float | None = None,
+    ) -> StepResult:
         """Add the converged step u (n_dofs,); its reactions come from the solver's last
-        evaluation, at u, where it has them."""
+        evaluation, at u, where it has them. pressure_factor: the factor on the pressure
+        loads (default load_factor)."""
         ev = solved.evaluation
+        system = self.model.discretise()
         reactions = ev.reactions
         if reactions is None:
-            reactions = self.model.discretise().reactions(u, load_factor)
+            reactions = system.reactions(u, load_factor)
+        value = self.model.pressure_value
+        factor = load_factor if pressure_factor is None else pressure_factor
+        if self._closed is None:
+            self._closed = value is not None and system.volume_closure() is None
         step = StepResult(
             load_factor,
             u.copy(),
@@ -84,6 +105,8 @@ class Results:
             ev.states,
             solved.stopped_by,
             solved.stop_report,
+            None if value is None else factor * value,
+            system.enclosed_volume(u) if self._closed else None,
         )
         self.steps.append(step)
         return step

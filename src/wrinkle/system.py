@@ -34,7 +34,9 @@ from wrinkle.loads import (
     edge_follower_forces,
     pressure_forces,
     pressure_volume,
+    pressure_volume_gradient,
     subtract_pressure_stiffness,
+    unclosed_edges,
 )
 from wrinkle.mesh import Mesh
 from wrinkle.solvers.base import Evaluation, EvaluationFailure
@@ -414,13 +416,17 @@ class DiscreteSystem:
         stiffness_sink: StiffnessSink | None = None,
         pressure_stiffness: bool = True,
         x_elements: np.ndarray | None = None,
+        pressure_factor: float | None = None,
     ) -> tuple[np.ndarray, np.ndarray | None]:
         """Assembled follower loads at u: forces (n_dofs,) and their load stiffness d f / d u,
         element-wise (n, 9, 9) on the triangles (None if not asked or no follower load), or
         handed block by block to ``stiffness_sink(elements, K)`` (then None is returned).
         pressure_stiffness=False leaves the pressure's out (``subtract_pressure_stiffness``
         takes it into the element blocks instead). x_elements: ``element_coordinates(u)`` if
-        the caller has them."""
+        the caller has them. pressure_factor: the factor on the pressures (default
+        load_factor; the unknown of volume control and gas loads)."""
+        if pressure_factor is None:
+            pressure_factor = load_factor
         x_nodes = self.mesh.nodes + u.reshape(-1, 3)
         forces = np.zeros(self.n_dofs)
         blocks: list[tuple[np.ndarray | slice, np.ndarray]] = []  # when no sink is given
@@ -432,7 +438,7 @@ class DiscreteSystem:
         loaded = self._pressurised()
         if loaded is not None:
             x = self._loaded_coordinates(u, loaded, x_elements)
-            pressure = load_factor * self.loading.pressure[loaded]
+            pressure = pressure_factor * self.loading.pressure[loaded]
             if self.compiled:
                 compiled.add_pressure_forces(forces, self.pattern.element_dofs[loaded], x, pressure)
             else:
@@ -498,6 +504,50 @@ class DiscreteSystem:
                 volume = float(np.sum(pressure_volume(x0)))
             self._reference_volume = volume
         return self._reference_volume
+
+    def enclosed_volume(self, u: np.ndarray) -> float:
+        """The signed volume the pressurised elements enclose at u (n_dofs,), counted
+        against the origin (``pressure_volume``): the volume of a closed membrane, or of a
+        part of one closed by symmetry planes through the origin (``volume_closure``)."""
+        loaded = self._pressurised()
+        if loaded is None:
+            return 0.0
+        return float(np.sum(pressure_volume(self._loaded_coordinates(u, loaded, None))))
+
+    def volume_gradient(self, u: np.ndarray) -> np.ndarray:
+        """d ``enclosed_volume`` / du at u, (n_dofs,), zero at the constrained components."""
+        gradient: np.ndarray = np.zeros(self.n_dofs)
+        loaded = self._pressurised()
+        if loaded is not None:
+            x = self._loaded_coordinates(u, loaded, None)
+            dofs = self.pattern.element_dofs[loaded]
+            gradient = np.bincount(
+                dofs.ravel(),
+                pressure_volume_gradient(x).reshape(dofs.shape).ravel(),
+                minlength=self.n_dofs,
+            )
+        return np.where(self.constrained, 0.0, gradient)
+
+    def volume_closure(self) -> str | None:
+        """Why the pressurised elements do not enclose a volume that ``enclosed_volume``
+        measures, or None if they do: none are pressurised, or a boundary edge is neither
+        held nor in a symmetry plane through the origin whose normal component is held
+        (``wrinkle.loads.unclosed_edges``)."""
+        loaded = self._pressurised()
+        if loaded is None:
+            return "no element is under pressure"
+        nodes = self.mesh.nodes
+        size = float(np.ptp(nodes, axis=0).max(initial=0.0))
+        tolerance = 1e-9 * (size if size > 0 else 1.0)
+        unclosed = unclosed_edges(nodes, self.mesh.triangles[loaded], self.constrained, tolerance)
+        if unclosed.size:
+            a, b = (int(node) for node in unclosed[0])
+            return (
+                f"{len(unclosed)} boundary edge(s) of the pressurised surface, the first from "
+                f"node {a} to node {b}, are neither held nor in a symmetry plane through the "
+                "origin with their normal component held: the surface encloses no volume"
+            )
+        return None
 
     def inadmissible(self, x_elements: np.ndarray) -> str | None:
         """Why the state with element coordinates x_elements (n_elements, 3, 3) is not a
@@ -567,15 +617,31 @@ class DiscreteSystem:
             external = external + self.follower_forces(u, load_factor, stiffness=False)[0]
         return np.where(self.constrained, self.internal_forces(u) - external, 0.0)
 
-    def at(self, load_factor: float = 1.0, prescribed: np.ndarray | None = None) -> StepProblem:
+    def at(
+        self,
+        load_factor: float = 1.0,
+        prescribed: np.ndarray | None = None,
+        pressure_factor: float | None = None,
+    ) -> StepProblem:
         """The nonlinear problem at one load level (``StepProblem``); prescribed: (n_dofs,)
         values of the constrained components (default load_factor times those at full
-        load)."""
+        load); pressure_factor: the factor on the pressures (default load_factor)."""
         if prescribed is None:
-            problem = StepProblem(self, load_factor, load_factor * self.prescribed)
+            problem = StepProblem(self, load_factor, load_factor * self.prescribed, pressure_factor)
             problem.motion_force = abs(load_factor) * self.motion_force()
             return problem
-        return StepProblem(self, load_factor, np.asarray(prescribed, dtype=float))
+        return StepProblem(self, load_factor, np.asarray(prescribed, dtype=float), pressure_factor)
+
+    def load_derivative(self, u: np.ndarray, pressure_only: bool = False) -> np.ndarray:
+        """d(f - f*)/d factor at u, (n_dofs,), zero at the constrained components: the loads
+        at factor 1 (dead and follower; the pressures alone if ``pressure_only``), which
+        the load factor or the pressure factor multiplies (the bordered solves of
+        ``wrinkle.solvers.bordered``)."""
+        dead = 0.0 if pressure_only else 1.0
+        forces = dead * self.loading.forces
+        if self.has_follower_loads:
+            forces = forces + self.follower_forces(u, dead, stiffness=False, pressure_factor=1.0)[0]
+        return np.where(self.constrained, 0.0, forces)
 
     def evaluate(
         self,
@@ -593,12 +659,20 @@ class StepProblem:
     """Residual, stiffness and potential energy at one load level (the solvers' ``Problem``).
 
     load_factor scales the dead forces and the follower loads; prescribed: (n_dofs,) values of
-    the constrained displacement components.
+    the constrained displacement components; pressure_factor scales the pressures (default
+    load_factor: under volume control and gas loads it is the unknown pressure).
     """
 
-    def __init__(self, system: DiscreteSystem, load_factor: float, prescribed: np.ndarray):
+    def __init__(
+        self,
+        system: DiscreteSystem,
+        load_factor: float,
+        prescribed: np.ndarray,
+        pressure_factor: float | None = None,
+    ):
         self.system = system
         self.load_factor = load_factor
+        self.pressure_factor = load_factor if pressure_factor is None else pressure_factor
         self.forces = load_factor * system.loading.forces
         self.prescribed = prescribed
         self.free = ~system.constrained
@@ -631,7 +705,7 @@ class StepProblem:
 
         def add_element_stiffness(elements: np.ndarray | slice, K: np.ndarray) -> None:
             # assembled block by block as evaluated
-            system.subtract_pressure_stiffness(K, x[elements], elements, self.load_factor)
+            system.subtract_pressure_stiffness(K, x[elements], elements, self.pressure_factor)
             with timer.part(ASSEMBLY):
                 pattern.add_to_data(data, elements, K, compiled=system.compiled)
 
@@ -660,9 +734,10 @@ class StepProblem:
                     subtract_load_stiffness if stiffness else None,
                     pressure_stiffness=False,
                     x_elements=x,
+                    pressure_factor=self.pressure_factor,
                 )
             external = external + follower
-            energy -= self.load_factor * system.pressure_work(u, x_elements=x)
+            energy -= self.pressure_factor * system.pressure_work(u, x_elements=x)
             if system.loading.follower_edges:
                 energy = np.nan  # follower edge loads have no potential
         residual = np.where(self.free, external - internal, 0.0)

@@ -15,7 +15,12 @@ from wrinkle.solvers.newton import RegularisedNewton
 from wrinkle.solvers.restricted_step import RestrictedStep
 from wrinkle.solvers.stepping import StepController
 
-__all__ = ["CONVERGENCE_TESTS", "SOLVERS", "SolverSettings", "make_solver"]
+__all__ = ["CONTROLS", "CONVERGENCE_TESTS", "SOLVERS", "SolverSettings", "make_solver"]
+
+# what steers the path: the load factor, the arc length (the load factor an unknown,
+# ``wrinkle.solvers.arc_length``) or the enclosed volume (the pressure an unknown,
+# ``wrinkle.solvers.control``)
+CONTROLS = ("load", "arc-length", "volume")
 
 # the tests that may end a solve: the residual test alone, or the accuracy stop too
 # (``wrinkle.solvers.stopping``) on the finer levels of a mesh sequence
@@ -87,6 +92,13 @@ class SolverSettings:
     step, with accuracy_energy (eta, the fraction of the discretisation error of the energy
     that may remain) and accuracy_change (the largest remaining change of a probe or
     reaction, relative to the largest displacement or the force scale).
+    control: "load" (the load factor grows over the steps), "arc-length" (the load factor is
+    an unknown and the path may pass limit points; ``steps`` sets the first increment, and
+    with ``stop`` the largest number of steps) or "volume" (the enclosed volume goes from
+    its initial value to volume_ratio times it, or to the absolute ``volume``, and the
+    pressure is the unknown); stop: (probe name, displacement) to end the path where the
+    magnitude of that probe's mean displacement reaches the value (any control). Arc length,
+    volume control, gas loads and a stop use the Newton method.
     Raises ValueError naming the first bad field.
     """
 
@@ -105,6 +117,10 @@ class SolverSettings:
     convergence: str = "residual"
     accuracy_energy: float = 0.1
     accuracy_change: float = 1e-4
+    control: str = "load"
+    volume_ratio: float | None = None
+    volume: float | None = None
+    stop: tuple[str, float] | None = None
 
     def __post_init__(self) -> None:
         linear_solvers = ["auto", *LINEAR_SOLVERS]
@@ -173,6 +189,34 @@ class SolverSettings:
                 ),
                 f"a number in (0, {MAX_TOLERANCE}]",
             ),
+            ("control", lambda: self.control in CONTROLS, f"one of {list(CONTROLS)}"),
+            (
+                "volume_ratio",
+                lambda: (
+                    self.volume_ratio is None
+                    or (_is_number(self.volume_ratio) and self.volume_ratio > 0)
+                ),
+                "a number > 0",
+            ),
+            (
+                "volume",
+                lambda: self.volume is None or (_is_number(self.volume) and self.volume > 0),
+                "a number > 0",
+            ),
+            (
+                "stop",
+                lambda: (
+                    self.stop is None
+                    or (
+                        isinstance(self.stop, tuple)
+                        and len(self.stop) == 2
+                        and isinstance(self.stop[0], str)
+                        and _is_number(self.stop[1])
+                        and self.stop[1] > 0
+                    )
+                ),
+                "(probe name, displacement > 0)",
+            ),
         ]
         for name, holds, requirement in rules:
             if not holds():
@@ -183,6 +227,20 @@ class SolverSettings:
             raise ValueError(
                 "solver convergence = 'accuracy' needs nested = true: the mesh's discretisation "
                 "error is estimated from the solution of the coarser mesh"
+            )
+
+        given = [name for name in ("volume_ratio", "volume") if getattr(self, name) is not None]
+        if self.control == "volume" and len(given) != 1:
+            raise ValueError(
+                "solver control = 'volume' needs one of volume_ratio (a multiple of the "
+                "initial enclosed volume) and volume (an absolute one)"
+            )
+        if self.control != "volume" and given:
+            raise ValueError(f"solver {given[0]} needs control = 'volume'")
+        if (self.control != "load" or self.stop is not None) and self.method != "newton":
+            raise ValueError(
+                f"solver method = {self.method!r} cannot follow control = {self.control!r} or "
+                "a stop: arc length, volume control and stops use method = 'newton'"
             )
 
     def replace(self, **changes: Any) -> SolverSettings:
