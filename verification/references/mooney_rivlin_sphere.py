@@ -34,7 +34,9 @@ makes g' smallest at x* = C10 / (2 C01), so if g'(x*) >= 0 the pressure rises fo
 Otherwise g has its one local minimum in x > x* at the root x_m of g' in [x*, C10/C01], and if
 g(x_m) < 0 the pressure rises to a maximum at the root of g in [1, x_m], falls to a minimum at
 the root in [x_m, C10/C01] and then rises without bound (like lambda) — the balloon's snap
-and recovery. Each root is found by ``scipy.optimize.brentq`` in its bracket.
+and recovery. Each root is found by ``scipy.optimize.brentq`` in its bracket. The maximum and
+the minimum exist for C01/C10 below 0.2145 (where they merge; bisection on the ratio with
+``turning_points``): C01/C10 = 0.1 has them at lambda = 1.4761 and 3.1426.
 
 Sources: J. E. Adkins and R. S. Rivlin, "Large elastic deformations of isotropic materials IX.
 The deformation of thin shells", Phil. Trans. R. Soc. Lond. A 244 (1952) 505-531; the
