@@ -104,18 +104,20 @@ class MooneyRivlinSphere:
 
     def turning_points(self) -> tuple[float | None, float | None]:
         """(lambda at the pressure maximum, lambda at the following minimum), each None where
-        there is none: (7^(1/6), None) for C01 = 0, (None, None) when p rises for ever."""
-        if self.C01 == 0.0:
-            return 7.0 ** (1.0 / 6.0), None
+        there is none: (7^(1/6), None) for C01 = 0 (found by the root finder too), (None, None)
+        when p rises for ever."""
+        tight = {"xtol": 1e-15, "rtol": 4 * np.finfo(float).eps}
+        if self.C01 == 0.0:  # g = C10 (7 - x^3): g(1) > 0 > g(4)
+            return math.sqrt(brentq(self._g, 1.0, 4.0, **tight)), None
         x_star = self.C10 / (2.0 * self.C01)
         x_top = self.C10 / self.C01
         if self._g_slope(x_star) >= 0.0:
             return None, None
-        x_m = brentq(self._g_slope, x_star, x_top, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+        x_m = brentq(self._g_slope, x_star, x_top, **tight)
         if self._g(x_m) >= 0.0:
             return None, None
-        x_max = brentq(self._g, 1.0, x_m, xtol=1e-15, rtol=4 * np.finfo(float).eps)
-        x_min = brentq(self._g, x_m, x_top, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+        x_max = brentq(self._g, 1.0, x_m, **tight)
+        x_min = brentq(self._g, x_m, x_top, **tight)
         return math.sqrt(x_max), math.sqrt(x_min)
 
     def stretch(self, pressure: float) -> float:
