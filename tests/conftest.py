@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from wrinkle.materials import Material, NeoHookean, StVenantKirchhoff
+from wrinkle.materials import Material, MooneyRivlin, NeoHookean, Ogden, StVenantKirchhoff
 
 REFERENCE_THICKNESS = 0.1
 
@@ -83,6 +83,18 @@ def material_cases() -> list[MaterialCase]:
             NeoHookean(mu=1.5, thickness=D0, lmbda=4.0),
             (0.0, 1.0, 0.0),
             0.7,
+        ),
+        MaterialCase(
+            "mooney_rivlin",
+            MooneyRivlin(C10=0.6, C01=0.15, thickness=D0),
+            (1.0, 0.0, 0.0),
+            0.0,
+        ),
+        MaterialCase(
+            "ogden",
+            Ogden(mu=[0.63, 0.0012, -0.01], alpha=[1.3, 5.0, -2.0], thickness=D0),
+            (0.0, 1.0, 0.0),
+            0.3,
         ),
     ]
 

@@ -382,6 +382,8 @@ BAD_ANNULUS = (
 BAD_CYLINDER = (
     "cylinder = {radius = 1.0, length = 2.0, n_circumferential = 8, n_axial = 2, n_cap = 0}"
 )
+MOONEY = 'model = "mooney-rivlin"\nC10 = 100.0\nC01 = 10.0\nthickness = 0.01'
+OGDEN = 'model = "ogden"\nmu = [300.0, -20.0]\nalpha = [2.0, -2.0]\nthickness = 0.01'
 NO_E_T = (
     'model = "svk-transverse"\nE_L = 5.0\nnu_LT = 0.3\nnu_TT = 0.3\nG_LT = 0.4\nthickness = 0.01'
 )
@@ -477,6 +479,81 @@ MORE = [
         "neo-hookean mu negative",
         replace(MAT, 'model = "neo-hookean"\nmu = -1.0\nthickness = 0.01'),
         "mu",
+    ),
+    (
+        "mooney-rivlin without C01",
+        replace(MAT, 'model = "mooney-rivlin"\nC10 = 100.0\nthickness = 0.01'),
+        "[material]: missing key 'C01'",
+    ),
+    (
+        "mooney-rivlin C01 negative",
+        replace(MAT, MOONEY.replace("C01 = 10.0", "C01 = -10.0")),
+        "[material]: MooneyRivlin: C01 must be finite and >= 0",
+    ),
+    (
+        "mooney-rivlin C10 zero",
+        replace(MAT, MOONEY.replace("C10 = 100.0", "C10 = 0.0")),
+        "[material]: MooneyRivlin: C10 must be finite and > 0",
+    ),
+    (
+        "mooney-rivlin C10 a list",
+        replace(MAT, MOONEY.replace("C10 = 100.0", "C10 = [100.0]")),
+        "[material]: 'C10' must be a number",
+    ),
+    (
+        "mooney-rivlin with lmbda",
+        replace(MAT, MOONEY + "\nlmbda = 1.0"),
+        "[material]: unknown key 'lmbda'",
+    ),
+    (
+        "ogden mu a number",
+        replace(MAT, OGDEN.replace("mu = [300.0, -20.0]", "mu = 300.0")),
+        "[material]: 'mu' must be a non-empty list of numbers",
+    ),
+    (
+        "ogden alpha empty",
+        replace(MAT, OGDEN.replace("alpha = [2.0, -2.0]", "alpha = []")),
+        "[material]: 'alpha' must be a non-empty list of numbers",
+    ),
+    (
+        "ogden lists of different length",
+        replace(MAT, OGDEN.replace("alpha = [2.0, -2.0]", "alpha = [2.0]")),
+        "[material]: 'mu' and 'alpha' must have the same length, got 'mu' 2, 'alpha' 1",
+    ),
+    (
+        "ogden alpha text",
+        replace(MAT, OGDEN.replace("alpha = [2.0, -2.0]", 'alpha = [2.0, "two"]')),
+        "[material]: 'alpha' has a bad entry 'two'",
+    ),
+    (
+        "ogden mu boolean",
+        replace(MAT, OGDEN.replace("mu = [300.0, -20.0]", "mu = [true, -20.0]")),
+        "[material]: 'mu' has a bad entry True",
+    ),
+    (
+        "ogden mu nan",
+        replace(MAT, OGDEN.replace("mu = [300.0, -20.0]", "mu = [nan, -20.0]")),
+        "[material]: 'mu' must be finite",
+    ),
+    (
+        "ogden alpha zero",
+        replace(MAT, OGDEN.replace("alpha = [2.0, -2.0]", "alpha = [2.0, 0.0]")),
+        "[material]: Ogden: alpha must be finite and nonzero",
+    ),
+    (
+        "ogden shear modulus negative",
+        replace(MAT, OGDEN.replace("mu = [300.0, -20.0]", "mu = [-300.0, -20.0]")),
+        "[material]: Ogden: mu and alpha: the shear modulus sum(mu_k alpha_k)/2 must be > 0",
+    ),
+    (
+        "ogden shear modulus zero",
+        replace(MAT, OGDEN.replace("mu = [300.0, -20.0]", "mu = [20.0, 20.0]")),
+        "[material]: Ogden: mu and alpha: the shear modulus sum(mu_k alpha_k)/2 must be > 0",
+    ),
+    (
+        "ogden without alpha",
+        replace(MAT, 'model = "ogden"\nmu = [300.0]\nthickness = 0.01'),
+        "[material]: missing key 'alpha'",
     ),
     (
         "transverse without E_T",

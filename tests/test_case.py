@@ -138,3 +138,28 @@ def test_failed_case_solve_keeps_the_labelled_steps(tmp_path):
     assert caught.value.results.probes is case.probes
     steps = caught.value.results.steps
     assert caught.value.reached == (steps[-1].load_factor if steps else 0.0)
+
+
+RUBBER = {
+    "mooney-rivlin": '{model = "mooney-rivlin", C10 = 150.0, C01 = 20.0, thickness = 0.01}',
+    "ogden": '{model = "ogden", mu = [300, -40.0], alpha = [2.0, -2], thickness = 0.01}',
+}
+
+
+def test_rubber_models_read_and_solve_alike(tmp_path):
+    """[material] model = "mooney-rivlin" and "ogden" give MooneyRivlin and Ogden with the
+    file's parameters (integers taken as numbers); Ogden alpha = (2, -2) is Mooney-Rivlin with
+    C10 = mu1/2, C01 = -mu2/2, so the two cases solve to the same displacements."""
+    finals = {}
+    for name, table in RUBBER.items():
+        text = CASE.replace('{model = "svk", E = 1000.0, nu = 0.3, thickness = 0.01}', table)
+        case = read_case(write(tmp_path, text))
+        (material,) = [m.material for m in case.model.materials]
+        finals[name] = case.solve(steps=2, tolerance=1e-12).final.displacement
+        if name == "ogden":
+            assert isinstance(material, wrinkle.Ogden)
+            assert material.mu == (300.0, -40.0) and material.alpha == (2.0, -2.0)
+        else:
+            assert isinstance(material, wrinkle.MooneyRivlin)
+            assert (material.C10, material.C01, material.thickness) == (150.0, 20.0, 0.01)
+    np.testing.assert_allclose(finals["ogden"], finals["mooney-rivlin"], rtol=1e-9, atol=1e-12)

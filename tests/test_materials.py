@@ -7,7 +7,9 @@ import pytest
 
 from wrinkle.materials import (
     Material,
+    MooneyRivlin,
     NeoHookean,
+    Ogden,
     StVenantKirchhoff,
     green_lagrange_voigt,
     voigt_stress,
@@ -30,6 +32,8 @@ MATERIALS = {
     "svk_general": lambda: StVenantKirchhoff(random_spd_stiffness(), thickness=D0),
     "nh_incompressible": lambda: NeoHookean(mu=1.5, thickness=D0),
     "nh_compressible": lambda: NeoHookean(mu=1.5, thickness=D0, lmbda=4.0),
+    "mooney_rivlin": lambda: MooneyRivlin(C10=0.6, C01=0.15, thickness=D0),
+    "ogden": lambda: Ogden(mu=[0.63, 0.0012, -0.01], alpha=[1.3, 5.0, -2.0], thickness=D0),
 }
 
 
@@ -362,6 +366,17 @@ BAD_PARAMETERS = [
     (lambda: NeoHookean(mu=1.0, thickness=np.nan), "thickness must"),
     (lambda: NeoHookean(mu=1.0, thickness=D0, lmbda=0.0), "lmbda must"),
     (lambda: NeoHookean(mu=1.0, thickness=D0, lmbda=np.inf), "lmbda must"),
+    (lambda: MooneyRivlin(C10=0.0, C01=0.1, thickness=D0), "C10 must"),
+    (lambda: MooneyRivlin(C10=1.0, C01=-0.1, thickness=D0), "C01 must be finite and >= 0"),
+    (lambda: MooneyRivlin(C10=1.0, C01=np.nan, thickness=D0), "C01 must"),
+    (lambda: MooneyRivlin(C10=1.0, C01=0.0, thickness=0.0), "thickness must"),
+    (lambda: Ogden(mu=[], alpha=[], thickness=D0), "mu must be a non-empty list"),
+    (lambda: Ogden(mu=[1.0, 2.0], alpha=[2.0], thickness=D0), "mu and alpha must have the same"),
+    (lambda: Ogden(mu=[np.inf], alpha=[2.0], thickness=D0), "mu must be finite"),
+    (lambda: Ogden(mu=[1.0], alpha=[0.0], thickness=D0), "alpha must be finite and nonzero"),
+    (lambda: Ogden(mu=[1.0], alpha=[-2.0], thickness=D0), "shear modulus .* must be > 0"),
+    (lambda: Ogden(mu=[1.0, -1.0], alpha=[2.0, 2.0], thickness=D0), "mu and alpha: the shear"),
+    (lambda: Ogden(mu=[1.0], alpha=[2.0], thickness=-1.0), "thickness must"),
 ]
 
 
@@ -416,6 +431,8 @@ def equal_moduli(nu_TT: float = NU_ISO, shear_factor: float = 1.0) -> StVenantKi
         (lambda: StVenantKirchhoff(random_spd_stiffness(), thickness=D0), False),
         (lambda: NeoHookean(mu=1.5, thickness=D0), True),
         (lambda: NeoHookean(mu=1.5, thickness=D0, lmbda=4.0), True),
+        (lambda: MooneyRivlin(C10=0.6, C01=0.15, thickness=D0), True),
+        (lambda: Ogden(mu=[0.63, 0.0012, -0.01], alpha=[1.3, 5.0, -2.0], thickness=D0), True),
     ],
     ids=[
         "svk-isotropic",
@@ -426,6 +443,8 @@ def equal_moduli(nu_TT: float = NU_ISO, shear_factor: float = 1.0) -> StVenantKi
         "svk-general",
         "nh-incompressible",
         "nh-compressible",
+        "mooney-rivlin",
+        "ogden",
     ],
 )
 def test_is_isotropic(build, expected: bool) -> None:

@@ -51,9 +51,9 @@ def _random_deformations(n, rng=RNG):
     return np.array(out)
 
 
-def _points_in_state(material, state, n=8):
+def _points_in_state(material, state, n=8, rng=RNG):
     wrinkling = Wrinkling(material)
-    F = _random_deformations(400)
+    F = _random_deformations(400, rng)
     C = np.einsum("nki,nkj->nij", F, F)
     r = wrinkling.response(C, tangent=False)
     chosen = np.flatnonzero(r.state == state)[:n]

@@ -21,7 +21,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from wrinkle.gas import Gas
-from wrinkle.materials import NeoHookean, StVenantKirchhoff
+from wrinkle.materials import MooneyRivlin, NeoHookean, Ogden, StVenantKirchhoff
 from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh, annulus, check_fits, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
@@ -53,7 +53,11 @@ MATERIAL_MODELS = {
     "svk": ("E", "nu"),
     "svk-transverse": ("E_L", "E_T", "nu_LT", "nu_TT", "G_LT"),
     "neo-hookean": ("mu",),
+    "mooney-rivlin": ("C10", "C01"),
+    "ogden": ("mu", "alpha"),
 }
+# the models whose parameters are lists of numbers, one per term
+_LIST_PARAMETERS = {"ogden": ("mu", "alpha")}
 GENERATORS: dict[str, tuple[Callable[..., Mesh], tuple[str, ...]]] = {
     "rectangle": (rectangle, ("width", "height", "nx", "ny")),
     "disk": (disk, ("outer_radius", "n_radial", "n_circumferential")),
@@ -158,6 +162,18 @@ class _Reader:
             if not ok:
                 self.fail(where, f"'{key}' has a bad component {item!r}")
         return value
+
+    def numbers(self, table: dict, key: str, where: str) -> list[float]:
+        """A non-empty list of finite numbers."""
+        value = table[key]
+        if not isinstance(value, list) or not value:
+            self.fail(where, f"'{key}' must be a non-empty list of numbers, got {value!r}")
+        for item in value:
+            if isinstance(item, bool) or not isinstance(item, (int, float)):
+                self.fail(where, f"'{key}' has a bad entry {item!r} (a number is needed)")
+            if not math.isfinite(item):
+                self.fail(where, f"'{key}' must be finite, got {value!r}")
+        return [float(item) for item in value]
 
     def nodes(self, mesh: Mesh, table: dict, where: str) -> np.ndarray:
         try:
@@ -502,7 +518,17 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
         {"lmbda"} if name == "neo-hookean" else set()
     )
     reader.keys(table, where, {*parameters, "thickness"}, optional)
-    values = {key: reader.number(table, key, where) for key in (*parameters, "thickness")}
+    lists = _LIST_PARAMETERS.get(name, ())
+    values: dict[str, Any] = {
+        key: reader.numbers(table, key, where) if key in lists else reader.number(table, key, where)
+        for key in (*parameters, "thickness")
+    }
+    if len({len(values[key]) for key in lists}) > 1:
+        lengths = ", ".join(f"'{key}' {len(values[key])}" for key in lists)
+        reader.fail(
+            where,
+            f"{' and '.join(repr(k) for k in lists)} must have the same length, got {lengths}",
+        )
     if "lmbda" in table:
         values["lmbda"] = reader.number(table, "lmbda", where)
     material: Material
@@ -511,6 +537,10 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
             material = StVenantKirchhoff.isotropic(**values)
         elif name == "svk-transverse":
             material = StVenantKirchhoff.transversely_isotropic(**values)
+        elif name == "mooney-rivlin":
+            material = MooneyRivlin(**values)
+        elif name == "ogden":
+            material = Ogden(**values)
         else:
             material = NeoHookean(**values)
     except ValueError as error:

@@ -7,7 +7,9 @@
 - one module per gallery benchmark with its closed-form or semi-analytical solution and the
   derivation in its docstring: ``simple_shear``, ``annulus_hub``, ``lame_annulus``,
   ``membrane_beam``, ``airbag`` (extrapolation and equilibrium), ``inflated_cylinder``,
-  ``sphere``.
+  ``sphere``;
+- :mod:`verification.references.mooney_rivlin_sphere`: the Mooney-Rivlin sphere's closed-form
+  pressure-stretch curve with its maximum and minimum (tested in tests/test_rubber_laws.py).
 
 Nothing here imports the element's wrinkling routine (``wrinkle.wrinkling``).
 """

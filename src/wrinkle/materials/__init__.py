@@ -13,13 +13,17 @@ from wrinkle.materials.base import (
     tensor_from_voigt_stress,
     voigt_stress,
 )
+from wrinkle.materials.mooney_rivlin import MooneyRivlin
 from wrinkle.materials.neo_hookean import NeoHookean
+from wrinkle.materials.ogden import Ogden
 from wrinkle.materials.svk import StVenantKirchhoff
 
 __all__ = [
     "Material",
     "MembraneResponse",
+    "MooneyRivlin",
     "NeoHookean",
+    "Ogden",
     "StVenantKirchhoff",
     "as_cauchy_green_batch",
     "green_lagrange_voigt",
