@@ -21,6 +21,7 @@ from pathlib import Path
 from verification.benchmarks import (
     airbag,
     annulus_hub,
+    balloon,
     inflated_cylinder,
     lame_annulus,
     membrane_beam,
@@ -44,6 +45,7 @@ MODULES = (
     airbag,
     inflated_cylinder,
     sphere,
+    balloon,
 )
 
 

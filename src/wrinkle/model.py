@@ -50,7 +50,7 @@ from wrinkle.solvers.control import (
     follow_load_path_to,
     follow_volume_path,
 )
-from wrinkle.solvers.settings import MAX_STEPS, SolverSettings
+from wrinkle.solvers.settings import ARC_LENGTH_STEPS, SolverSettings
 from wrinkle.solvers.stepping import follow_load_path
 from wrinkle.system import DiscreteSystem, FollowerEdgeLoad, Loading
 from wrinkle.wrinkling import Wrinkling
@@ -554,8 +554,18 @@ class Model:
                     "solver control = 'arc-length': the loads alone may follow the load factor; "
                     "the model prescribes displacements (use control = 'load')"
                 )
-            max_steps = settings.steps if stop is not None else MAX_STEPS
-            return follow_arc_length(system, solver, controller, record, max_steps, u0, timer, stop)
+            max_steps = settings.steps if stop is not None else ARC_LENGTH_STEPS * settings.steps
+            return follow_arc_length(
+                system,
+                solver,
+                controller,
+                record,
+                max_steps,
+                u0,
+                timer,
+                stop,
+                self._describe_load,
+            )
         options: dict[str, Any] = {
             "first_guess": first_guess,
             "first_stop": None if first_guess is None else first_guess.stop,

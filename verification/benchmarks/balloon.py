@@ -39,10 +39,11 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from verification.levels import mesh_level
+from verification.references.mooney_rivlin_sphere import MooneyRivlinSphere
 from verification.references.sphere import LIMIT_STRETCH, InflatedSphere, effective_radius
 from verification.report import Benchmark, Check, Convergence, Outcome
 from wrinkle.case import Case, read_case_data
-from wrinkle.gas import Gas
+from wrinkle.materials import MooneyRivlin
 from wrinkle.mesh import mesh_size
 from wrinkle.plot import new_figure
 from wrinkle.results import Results
@@ -54,6 +55,9 @@ __all__ = ["BENCHMARK", "run"]
 _SOURCE = "eq. (4), Adkins & Rivlin 1952, of the faceted octant"
 AMBIENT = 1.0e5  # N/m^2, the gas's surroundings
 GASES = (("isothermal", 3.0e5, 1.0), ("adiabatic", 1.2e5, 1.4))  # name, p0, gamma
+# C01 / C10 = 0.1: the pressure rises, falls and rises again (maximum at lambda = 1.4761,
+# minimum at 3.1426, verification.references.mooney_rivlin_sphere)
+MOONEY_RIVLIN = {"C10": 2.0e5, "C01": 2.0e4, "thickness": 1.0e-3}
 
 
 @dataclass
@@ -71,6 +75,9 @@ class _Level:
     limit: tuple[float, float]
     gas_stretch: dict[str, float]
     not_taut: int
+    rubber_curve: tuple[np.ndarray, np.ndarray]
+    rubber_maximum: tuple[float, float]
+    rubber_minimum: tuple[float, float]
 
 
 def _curve(results: Results, volume0: float) -> tuple[np.ndarray, np.ndarray]:
@@ -79,15 +86,18 @@ def _curve(results: Results, volume0: float) -> tuple[np.ndarray, np.ndarray]:
     return np.array(stretch), np.array(pressure)
 
 
-def _limit_point(case: Case, results: Results, volume0: float) -> tuple[float, float]:
-    """(stretch, pressure) where the volume-controlled balloon's pressure is largest: a
-    bounded search over the volume between the neighbours of the largest converged
-    pressure, each pressure from a volume-controlled solve."""
+def _turning_point(
+    case: Case, results: Results, volume0: float, sign: float = 1.0, after: int = 0
+) -> tuple[float, float, int]:
+    """(stretch, pressure, step) where the volume-controlled balloon's pressure is largest
+    (sign 1) or smallest (sign -1) among the converged steps from ``after`` on: a bounded
+    search over the volume between that step's neighbours, each pressure from a
+    volume-controlled solve."""
     model, settings = case.model, case.settings
     system = model.discretise()
     solver = settings.solver()
     steps = results.steps
-    k = int(np.argmax([step.pressure for step in steps]))
+    k = after + int(np.argmax([sign * step.pressure for step in steps[after:]]))
     low = steps[max(k - 1, 0)].enclosed_volume
     high = steps[min(k + 1, len(steps) - 1)].enclosed_volume
     start = [steps[k].displacement, float(steps[k].pressure)]
@@ -103,13 +113,13 @@ def _limit_point(case: Case, results: Results, volume0: float) -> tuple[float, f
             merit=VolumeLagrangian(1.0, volume),
         )
         start[:] = [solved.u, solved.mu]
-        return -solved.mu
+        return -sign * solved.mu
 
     found = minimize_scalar(
         minus_pressure, bounds=(low, high), method="bounded", options={"xatol": 1e-9 * high}
     )
     solver.release()
-    return float((found.x / volume0) ** (1.0 / 3.0)), float(-found.fun)
+    return float((found.x / volume0) ** (1.0 / 3.0)), float(-sign * found.fun), k
 
 
 def _solve_level(case_path: Path, n: int) -> _Level:
@@ -117,15 +127,21 @@ def _solve_level(case_path: Path, n: int) -> _Level:
     mesh = case.model.mesh
     volume0 = case.model.discretise().reference_volume
     by_volume = case.solve()
-    limit = _limit_point(case, by_volume, volume0)
+    limit = _turning_point(case, by_volume, volume0)[:2]
+    rubber = mesh_level(case_path, {"solver": {"volume_ratio": 64.0}}, n=n)
+    rubber.model.assign_material(MooneyRivlin(**MOONEY_RIVLIN))
+    by_rubber = rubber.solve(steps=64)
+    *maximum, top = _turning_point(rubber, by_rubber, volume0)
+    *minimum, _ = _turning_point(rubber, by_rubber, volume0, -1.0, top)
     radius = float(np.linalg.norm(mesh.nodes, axis=1).max())
-    arc = mesh_level(case_path, n=n)
+    # the load's value sets the first step, 1/50 of it: 100 N/m², a stretch of 1.002
+    arc = mesh_level(case_path, {"load": [{"kind": "pressure", "value": 5000.0}]}, n=n)
     arc_settings = dataclasses.replace(
         arc.settings,
         control="arc-length",
         volume_ratio=None,
         stop=("pole", 2.0 * radius),
-        steps=200,
+        steps=50,
     )
     by_arc = arc.model.solve(arc_settings, probes=arc.probes)
     gas_stretch = {}
@@ -138,7 +154,9 @@ def _solve_level(case_path: Path, n: int) -> _Level:
         settings = dataclasses.replace(gas.settings, control="load", volume_ratio=None, steps=4)
         final = gas.model.solve(settings).final
         gas_stretch[name] = (final.enclosed_volume / volume0) ** (1.0 / 3.0)
-    not_taut = sum(s.states[1] + s.states[2] for r in (by_volume, by_arc) for s in r.steps)
+    not_taut = sum(
+        s.states[1] + s.states[2] for r in (by_volume, by_arc, by_rubber) for s in r.steps
+    )
     return _Level(
         n,
         mesh_size(mesh),
@@ -149,6 +167,9 @@ def _solve_level(case_path: Path, n: int) -> _Level:
         limit,
         gas_stretch,
         int(not_taut),
+        _curve(by_rubber, volume0),
+        (maximum[0], maximum[1]),
+        (minimum[0], minimum[1]),
     )
 
 
@@ -221,6 +242,31 @@ def run(case: Path, out: Path, quick: bool) -> Outcome:
             tolerance["limit_stretch"],
         ),
     ]
+    rubber = MooneyRivlinSphere(
+        MOONEY_RIVLIN["C10"], MOONEY_RIVLIN["C01"], MOONEY_RIVLIN["thickness"], sphere.radius
+    )
+    top, bottom = rubber.turning_points()
+    assert top is not None and bottom is not None
+    for label, reference, found in (
+        ("maximum", top, finest.rubber_maximum),
+        ("minimum", bottom, finest.rubber_minimum),
+    ):
+        checks += [
+            Check(
+                f"Mooney-Rivlin (C01/C10 = 0.1): stretch at the pressure's {label}, n = {finest.n}",
+                reference,
+                "eq. (3) of verification.references.mooney_rivlin_sphere, root",
+                found[0],
+                tolerance["limit_stretch"],
+            ),
+            Check(
+                f"Mooney-Rivlin: pressure at its {label} (N/m²), n = {finest.n}",
+                ratio * float(rubber.pressure(reference)),
+                "eq. (2) there, of the faceted octant",
+                found[1],
+                tolerance["limit_pressure"],
+            ),
+        ]
     for name, p0, gamma in GASES:
         checks.append(
             Check(
@@ -270,7 +316,9 @@ def _plot(sphere: InflatedSphere, levels: list[_Level], path: Path) -> Path:
     left.plot([finest.limit[0]], [finest.limit[1]], "D", color="C3", label="limit point found")
     for k, (name, _, _) in enumerate(GASES):
         lam = finest.gas_stretch[name]
-        left.plot([lam], [ratio * sphere.pressure(lam)], "s", color=f"C{4 + k}", label=f"gas, {name}")
+        left.plot(
+            [lam], [ratio * sphere.pressure(lam)], "s", color=f"C{4 + k}", label=f"gas, {name}"
+        )
     left.set_xlabel(r"stretch $\lambda = (V/V_0)^{1/3}$")
     left.set_ylabel("pressure (N/m²)")
     left.grid(True, alpha=0.3)
@@ -281,8 +329,12 @@ def _plot(sphere: InflatedSphere, levels: list[_Level], path: Path) -> Path:
         for curve, marker in ((level.volume_curve, "o"), (level.arc_curve, "x")):
             lam, p = curve
             right.semilogy(
-                lam, np.abs(p / (factor * sphere.pressure(lam)) - 1.0) + 1e-16, marker,
-                color=f"C{k}", ms=4, label=f"n = {level.n}" if marker == "o" else None,
+                lam,
+                np.abs(p / (factor * sphere.pressure(lam)) - 1.0) + 1e-16,
+                marker,
+                color=f"C{k}",
+                ms=4,
+                label=f"n = {level.n}" if marker == "o" else None,
             )
     right.set_xlabel(r"stretch $\lambda$")
     right.set_ylabel("|relative pressure error|")

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -97,14 +98,17 @@ def follow_arc_length(
     u0: np.ndarray | None = None,
     timer: Stopwatch | None = None,
     stop: ProbeDisplacement | None = None,
+    describe_load: Callable[[float], str] | None = None,
 ) -> PathEnd:
     """Arc length (module docstring) from the state u0 (zero) at load factor 0: the first
     step to load factor ``controller.first()`` under load control, then at most
     ``max_steps`` steps in all; the end at load factor 1, or, with ``stop``, only where the
     probe's displacement reaches it. on_step(load_factor, u, solved) after each converged
-    step. Raises ConvergenceError (``reached`` set) where a step fails with the smallest arc
-    length (``controller.min_step`` times the first) or, without a stop, where the path has
-    not reached load factor 1 in max_steps steps."""
+    step; describe_load(load_factor): the loads in words, for messages. Raises
+    ConvergenceError (``reached`` set) where a step fails with the smallest arc length
+    (``controller.min_step`` times the first) or, without a stop, where the path has not
+    reached load factor 1 in max_steps steps or has come back to load factor 0 (the loads
+    have a maximum below their full value: the message gives it)."""
     u = np.zeros(system.n_dofs) if u0 is None else np.array(u0, dtype=float)
     family = LoadFamily(system)
     share = None
@@ -134,6 +138,7 @@ def follow_arc_length(
     before_u, before_factor = u, 0.0
     u, factor = solved.u, first
     steps = 1
+    highest = first
     while steps < max_steps:
         du, dfactor = u - before_u, factor - before_factor
         size = math.sqrt(float(du @ du) / scale_u2 + dfactor**2)
@@ -177,6 +182,12 @@ def follow_arc_length(
         before_u, before_factor = u, factor
         u, factor = new_u, new_factor
         steps += 1
+        highest = max(highest, factor)
+        if stop is None and factor <= 0.0:
+            on_step(factor, u, solved_step)
+            raise _short_of_the_end(
+                "before the path came back to load factor 0", factor, highest, describe_load
+            )
         logger.info(
             "arc-length step %d: load factor %.6g in %d iterations",
             steps,
@@ -191,12 +202,25 @@ def follow_arc_length(
             f"ended after {max_steps} steps (the largest number allowed) at load factor "
             f"{factor:.6g}, before the probe's displacement reached the stop {stop.target:.6g}"
         )
+    raise _short_of_the_end(f"in {max_steps} steps", factor, highest, describe_load)
+
+
+def _short_of_the_end(
+    when: str,
+    factor: float,
+    highest: float,
+    describe_load: Callable[[float], str] | None,
+) -> ConvergenceError:
+    """The error of an arc-length path that did not reach load factor 1 ``when``."""
+    load = "" if describe_load is None else f" ({describe_load(highest)})"
     failure = ConvergenceError(
-        f"arc length: load factor 1 not reached in {max_steps} steps (load factor {factor:.6g})",
+        f"arc length: load factor 1 not reached {when}: the largest load factor on the path "
+        f"was {highest:.6g}{load}, and it is now {factor:.6g}; the structure carries no more "
+        "than that on this path (a stop at a probe's displacement ends it earlier)",
         [],
     )
     failure.reached = factor
-    raise failure
+    return failure
 
 
 def _share_to(factor: float, new_factor: float) -> float:

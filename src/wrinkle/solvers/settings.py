@@ -70,6 +70,9 @@ MAX_TOLERANCE = 1e-2
 # the most load steps a path may aim at: each converged step is a results file, and 10^4 is
 # the number of increments of the default min_step already
 MAX_STEPS = 10_000
+# an arc-length path without a stop ends at load factor 1 within this many times ``steps``
+# steps, or fails (its loads have a maximum below their full value)
+ARC_LENGTH_STEPS = 10
 
 
 @dataclass(frozen=True)
@@ -92,13 +95,14 @@ class SolverSettings:
     step, with accuracy_energy (eta, the fraction of the discretisation error of the energy
     that may remain) and accuracy_change (the largest remaining change of a probe or
     reaction, relative to the largest displacement or the force scale).
-    control: "load" (the load factor grows over the steps), "arc-length" (the load factor is
-    an unknown and the path may pass limit points; ``steps`` sets the first increment, and
-    with ``stop`` the largest number of steps) or "volume" (the enclosed volume goes from
-    its initial value to volume_ratio times it, or to the absolute ``volume``, and the
-    pressure is the unknown); stop: (probe name, displacement) to end the path where the
-    magnitude of that probe's mean displacement reaches the value (any control). Arc length,
-    volume control, gas loads and a stop use the Newton method.
+    control: "load" (the load factor grows over the steps), "arc-length" (the load factor
+    is an unknown and the path may pass limit points; ``steps`` sets the first increment,
+    and is the largest number of steps with ``stop``, ARC_LENGTH_STEPS times it without) or
+    "volume" (the enclosed volume goes from its initial value to volume_ratio times it, or
+    to the absolute ``volume``, and the pressure is the unknown); stop: (probe name,
+    displacement) to end the path where the magnitude of that probe's mean displacement
+    reaches the value (any control). Arc length, volume control, gas loads and a stop use
+    the Newton method.
     Raises ValueError naming the first bad field.
     """
 
