@@ -687,6 +687,94 @@ MORE = [
     ("accuracy_energy 2", append("[solver]\naccuracy_energy = 2.0"), "accuracy_energy"),
     ("accuracy_change 0.5", append("[solver]\naccuracy_change = 0.5"), "accuracy_change"),
     ("accuracy_change 0", append("[solver]\naccuracy_change = 0.0"), "accuracy_change"),
+    # path control (issue 20): volume control, arc length, gas, stop
+    ("control unknown", append('[solver]\ncontrol = "riks"'), "unknown control 'riks'"),
+    ("volume_ratio without control", append("[solver]\nvolume_ratio = 2.0"), "needs control"),
+    ("volume control without a volume", append('[solver]\ncontrol = "volume"'), "volume_ratio"),
+    (
+        "volume_ratio zero",
+        append('[solver]\ncontrol = "volume"\nvolume_ratio = 0.0'),
+        "volume_ratio",
+    ),
+    (
+        "volume control of a held volume",
+        append(
+            '[[load]]\nkind = "pressure"\nvalue = 1.0\n[solver]\ncontrol = "volume"\nvolume = 1.0'
+        ),
+        "the enclosed volume cannot change",
+    ),
+    (
+        "volume control on an open membrane",
+        chain(
+            replace('nodes = "z == 0"\nfix = ["z"]', 'nodes = "x == 0.5"\nfix = ["z"]'),
+            append(
+                '[[load]]\nkind = "pressure"\nvalue = 1.0\n'
+                + '[solver]\ncontrol = "volume"\nvolume = 1.0'
+            ),
+        ),
+        "solver control = 'volume': 4 boundary edge(s)",
+    ),
+    (
+        "arc length with prescribed motion",
+        append('[[load]]\nkind = "pressure"\nvalue = 1.0\n' + '[solver]\ncontrol = "arc-length"'),
+        "prescribes displacements",
+    ),
+    (
+        "arc length with restricted-step",
+        append('[solver]\ncontrol = "arc-length"\nmethod = "restricted-step"'),
+        "use method = 'newton'",
+    ),
+    (
+        "stop names no probe",
+        append('[solver]\nstop = {probe = "tip", displacement = 0.1}'),
+        "'stop' names probe 'tip'",
+    ),
+    ("stop a number", append("[solver]\nstop = 0.1"), "'stop' must be"),
+    (
+        "stop displacement negative",
+        append(
+            '[[probe]]\nname = "tip"\nnodes = "y == 1"\n[solver]\nstop = {probe = "tip", displacement = -1.0}'
+        ),
+        "'displacement' must be > 0",
+    ),
+    (
+        "gas on an open membrane",
+        chain(
+            replace('nodes = "z == 0"\nfix = ["z"]', 'nodes = "x == 0.5"\nfix = ["z"]'),
+            append('[[load]]\nkind = "gas"\np0 = 2e5\nambient = 1e5'),
+        ),
+        "[[load]] kind = 'gas': 4 boundary edge(s)",
+    ),
+    (
+        "gas without ambient",
+        append('[[load]]\nkind = "gas"\np0 = 2e5'),
+        "missing key 'ambient'",
+    ),
+    (
+        "gas with p0 and amount",
+        append('[[load]]\nkind = "gas"\np0 = 2e5\namount = 1.0\nambient = 1e5'),
+        "exactly one of 'p0'",
+    ),
+    (
+        "gas gamma below 1",
+        append('[[load]]\nkind = "gas"\np0 = 2e5\nambient = 1e5\ngamma = 0.5'),
+        "'gamma' must be >= 1",
+    ),
+    (
+        "gas and pressure",
+        append(
+            '[[load]]\nkind = "pressure"\nvalue = 1.0\n'
+            + '[[load]]\nkind = "gas"\np0 = 2e5\nambient = 1e5'
+        ),
+        "at most one gas load",
+    ),
+    (
+        "gas under volume control",
+        append(
+            '[[load]]\nkind = "gas"\np0 = 2e5\nambient = 1e5\n[solver]\ncontrol = "volume"\nvolume = 1.0'
+        ),
+        "a gas load is solved under control = 'load'",
+    ),
     # top level
     ("title a number", top("title = 3"), "title"),
     ("verification a number", top("verification = 3"), "[verification]"),

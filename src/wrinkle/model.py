@@ -544,6 +544,12 @@ class Model:
             open_surface = system.volume_closure()
             if open_surface is not None:
                 raise ValueError(f"{what}: {open_surface}")
+            start = np.zeros(system.n_dofs) if u0 is None else u0
+            if not np.any(system.volume_gradient(start)):
+                raise ValueError(
+                    f"{what}: the enclosed volume cannot change: the supports hold every "
+                    "component that would change it"
+                )
             constraint_at = self._volume_constraints(system, settings, what)
             return follow_volume_path(
                 system, solver, controller, constraint_at, record, u0, 0.0, timer, stop

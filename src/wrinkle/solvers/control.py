@@ -316,7 +316,8 @@ def follow_volume_path(
     increment = controller.first()
     share = _shared(timer)
     while t < 1.0 - _END:
-        trial_t = min(1.0, t + increment)
+        trial_t = t + increment
+        trial_t = 1.0 if trial_t >= 1.0 - _END else trial_t
         start_u, start_mu = u, mu
         if previous is not None:
             before_t, before_u, before_mu = previous
