@@ -66,10 +66,11 @@ SUMMARY = "summary.json"
 HISTORY = "history.csv"
 # the pictures `wrinkle plot` draws into a results folder (wrinkle.plot), removed with the old
 # steps when a new run starts there
-STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE = (
+STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE = (
     "state.png",
     "principal_stress.png",
     "load_displacement.png",
+    "pressure_volume.png",
 )
 COLLECTION = "results.pvd"
 STEP_FILE = re.compile(r"step_\d{4,}\.vtu")
@@ -165,9 +166,13 @@ class ResultWriter:
         # the pressure column where the model has pressure loads, the enclosed volume where
         # they enclose one (``DiscreteSystem.volume_closure``)
         self.has_pressure = getattr(model, "pressure_value", None) is not None
-        self.has_volume = self.has_pressure and model.discretise().volume_closure() is None
+        system = model.discretise() if self.has_pressure else None
+        self.has_volume = system is not None and system.volume_closure() is None
+        self.reference_volume = (
+            system.reference_volume if system is not None and self.has_volume else None
+        )
         self.out_dir.mkdir(parents=True, exist_ok=True)
-        pictures = {STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE}
+        pictures = {STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE}
         for old in self.out_dir.iterdir():
             if STEP_FILE.fullmatch(old.name) or old.name in pictures:
                 old.unlink()
@@ -294,6 +299,8 @@ class ResultWriter:
             "steps": self.steps,
             "wall_time": time.perf_counter() - self._start,
         }
+        if self.reference_volume is not None:
+            summary["reference_volume"] = self.reference_volume
         if self.units is not None:
             summary["units"] = self.units
         if self.case is not None:

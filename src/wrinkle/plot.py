@@ -142,11 +142,21 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
     small square of the view on fine meshes); ``principal_stress.png``, the major principal
     Cauchy stress resultant (force per current length) on the same view;
     ``load_displacement.png``, the mean displacement of each probe (magnitude and components)
-    against the load factor, or the largest nodal displacement if there are no probes.
-    Returns the paths of the three files. Raises ValueError if no step has been written.
+    against the load factor, or the largest nodal displacement if there are no probes; and,
+    where the history has the columns ``pressure`` and ``enclosed_volume`` (a closed
+    membrane under pressure), ``pressure_volume.png``, the pressure against the enclosed
+    volume from the reference state. Returns the paths of the files. Raises ValueError if no
+    step has been written.
     """
     from wrinkle.mesh import meshio_read, require_meshio
-    from wrinkle.output import CURVE_PICTURE, HISTORY, STATE_PICTURE, STRESS_PICTURE, SUMMARY
+    from wrinkle.output import (
+        CURVE_PICTURE,
+        HISTORY,
+        STATE_PICTURE,
+        STRESS_PICTURE,
+        SUMMARY,
+        VOLUME_PICTURE,
+    )
 
     require_meshio()
     out_dir = Path(out_dir)
@@ -180,6 +190,9 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
             summary, out_dir / HISTORY, _unit(units, "length"), out_dir / CURVE_PICTURE
         ),
     ]
+    volume = _plot_pressure_volume(summary, out_dir / HISTORY, units, out_dir / VOLUME_PICTURE)
+    if volume is not None:
+        paths.append(volume)
     if damaged:
         raise DamagedResults(
             f"{damaged[0]}; drew load factor {last['load_factor']:.4g}, the last readable step",
@@ -388,6 +401,33 @@ def _plot_load_displacement(
         ax.set_xlim(0.0, 1.03 * max(1.0, float(load.max(initial=0.0))))
         ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]))
         ax.grid(True, alpha=0.3)
+    if not summary["converged"]:
+        fig.suptitle(_stop_note(summary["message"], 120), fontsize=9, color="firebrick")
+    fig.savefig(path, dpi=120)
+    return path
+
+
+def _plot_pressure_volume(
+    summary: dict, history_path: Path, units: dict, path: Path
+) -> Path | None:
+    """The pressure against the enclosed volume of every step, from the reference state
+    (its volume at zero pressure); None where the history has not both columns."""
+    header, history = _read_history(history_path)
+    if not {"pressure", "enclosed_volume"} <= set(header):
+        return None
+    pressure = history[:, header.index("pressure")]
+    volume = history[:, header.index("enclosed_volume")]
+    reference = summary.get("reference_volume")
+    if isinstance(reference, int | float):
+        pressure, volume = np.r_[0.0, pressure], np.r_[reference, volume]
+    fig = new_figure(figsize=(6.5, 4.5), layout="constrained")
+    ax = fig.subplots()
+    ax.plot(volume, pressure, "o-", ms=4)
+    length, force = _unit(units, "length"), _unit(units, "force")
+    ax.set_xlabel(_with_unit("enclosed volume", f"{length}³" if length else ""))
+    ax.set_ylabel(_with_unit("pressure", f"{force}/{length}²" if force and length else ""))
+    ax.set_title("Pressure against enclosed volume")
+    ax.grid(True, alpha=0.3)
     if not summary["converged"]:
         fig.suptitle(_stop_note(summary["message"], 120), fontsize=9, color="firebrick")
     fig.savefig(path, dpi=120)

@@ -9,8 +9,9 @@ prediction (``tangent_prediction``). ``follow_load_path`` runs the loop and call
 each converged step. If the first step fails, the end of the path is tried before any
 cut-back, and the levels below it are reached downwards from there (``descend``): a small
 pressure on a flat sheet is harder than the full one, so cutting the first step back makes
-the problem harder, not easier. Other path followers (arc length, volume control) and several
-analysis steps belong beside it, on the same ``LoadLevels``.
+the problem harder, not easier. The other path followers, arc length
+(``wrinkle.solvers.arc_length``) and volume control and gas loads
+(``wrinkle.solvers.control``), work beside it on the same ``LoadLevels``.
 """
 
 from __future__ import annotations
@@ -405,8 +406,8 @@ def _limit_point_error(
     load = "" if describe_load is None else f" ({describe_load(factor)})"
     failure = ConvergenceError(
         f"limit point passed near load factor {factor:.6g}{load}: {what}; load control "
-        "cannot pass a maximum of the load (arc-length or volume control would be needed, "
-        "and wrinkle has neither yet)",
+        "cannot pass a maximum of the load: use [solver] control = \"arc-length\" or "
+        "\"volume\"",
         history,
     )
     failure.reached = failure.limit_point = factor
