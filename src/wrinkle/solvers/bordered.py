@@ -63,9 +63,6 @@ logger = logging.getLogger("wrinkle.solver")
 
 _HALVINGS = 6  # step fractions 1, 1/2, ..., 1/32 tried before the tangent is regularised
 _SUFFICIENT = 1e-4  # Armijo's fraction of the predicted decrease of the merit
-_THETA_START = 0.0  # the first factorisation is of the plain tangent
-_THETA_FIRST = 1e-8  # the regularisation after the first rejection
-_THETA_MAX = 1e4  # beyond this the regularised step no longer solves the bordered system
 _ROUND_OFF = 1e-12  # a merit change below this fraction of it is round-off
 
 
@@ -218,9 +215,8 @@ def solve_bordered(
     solver._time_with(problem)
     lin = constraint(u, mu)
     history, constraint_history = [ev.residual_norm], [lin.value]
-    theta = _THETA_START
     free = problem.free
-    solver.initial_theta(ev.tangent, free)
+    theta = solver.initial_theta(ev.tangent, free)
     fallback = ResidualMerit(constraint.scale)
     merit = fallback if merit is None else merit
     for iteration in range(solver.max_iterations + 1):
@@ -241,32 +237,42 @@ def solve_bordered(
         q = family.derivative(u)
         g = np.zeros_like(u) if lin.gradient is None else lin.gradient
         accepted = None
-        for _ in range(40):
+        for _ in range(solver.max_rejections):
             step = _bordered_step(solver, ev, theta, free, q, g, lin)
-            if step is not None:
-                du, dmu = step
-                fallback.fix_weight(ev, q, dmu)
-                K_du = ev.residual + dmu * q  # the regularised tangent times du
-                judge: Merit = merit
-                slope = merit.slope(ev, lin.value, du, dmu, K_du)
-                current = merit.value(ev, u, mu, lin.value)
-                if not math.isfinite(current):
-                    slope = -1.0  # a start where the merit is not defined: any point will do
-                elif slope is None or (
-                    math.isfinite(current) and abs(slope) <= _ROUND_OFF * abs(current)
-                ):
-                    judge = fallback  # a decrease at round-off: judged by the residual
-                    slope = fallback.slope(ev, lin.value, du, dmu, K_du)
-                    current = fallback.value(ev, u, mu, lin.value)
-                if slope is not None and slope < 0.0:
-                    accepted = _line_search(
-                        problem_at, constraint, judge, u, mu, du, dmu, current, slope
-                    )
+            if step is None:
+                theta = solver.increase(theta)
+                continue
+            du, dmu = step
+            fallback.fix_weight(ev, q, dmu)
+            K_du = ev.residual + dmu * q  # the regularised tangent times du
+            judge: Merit = merit
+            slope = merit.slope(ev, lin.value, du, dmu, K_du)
+            current = merit.value(ev, u, mu, lin.value)
+            if not math.isfinite(current):
+                slope = -1.0  # a start where the merit is not defined: any point will do
+            elif slope is None or abs(slope) <= _ROUND_OFF * abs(current):
+                judge = fallback  # a decrease at round-off: judged by the residual
+                slope = fallback.slope(ev, lin.value, du, dmu, K_du)
+                current = fallback.value(ev, u, mu, lin.value)
+            if slope is None or not slope < 0.0:
+                theta = solver.increase(theta)
+                continue
+            accepted, value = _try(problem_at, constraint, judge, u, mu, du, dmu, 1.0, current)
+            if accepted is None:
+                rho = -math.inf
+            elif not math.isfinite(current):
+                rho = 1.0  # from a start where the merit is not defined
+            else:
+                rho = (current - value) / (-0.5 * slope)
+            if rho < 0.25:  # the trust rules of the Newton solver (``RegularisedSolver``)
+                theta = solver.increase(theta)
+            elif rho > 0.75:
+                theta = solver.decrease(theta)
+            if accepted is None or rho <= 0.0:
+                accepted = _line_search(
+                    problem_at, constraint, judge, u, mu, du, dmu, current, slope
+                )
             if accepted is not None:
-                theta = 0.1 * theta if theta > _THETA_FIRST else _THETA_START
-                break
-            theta = _THETA_FIRST if theta == 0.0 else 10.0 * theta
-            if theta > _THETA_MAX:
                 break
         if accepted is None:
             raise ConvergenceError(
@@ -294,9 +300,10 @@ def _bordered_step(
     g: np.ndarray,
     lin: Linearised,
 ) -> tuple[np.ndarray, float] | None:
-    """(du, dmu) of the bordered Newton step with the tangent regularised by theta (0: the
-    tangent itself), by one factorisation and two solves; None if it is singular."""
-    K = ev.tangent if theta == 0.0 else solver.regularised(ev, theta, free)
+    """(du, dmu) of the bordered Newton step with the tangent regularised by theta
+    (``RegularisedNewton.regularised``), by one factorisation and two solves; None if it is
+    singular."""
+    K = solver.regularised(ev, theta, free)
     solve = solver.factorise(K, ev.symmetric)
     if solve is None:
         return None
@@ -311,6 +318,39 @@ def _bordered_step(
     return a + dmu * b, dmu
 
 
+Trial = tuple[np.ndarray, float, SteppedProblem, Evaluation, Linearised]
+
+
+def _try(
+    problem_at: Callable[[float], SteppedProblem],
+    constraint: Constraint,
+    merit: Merit,
+    u: np.ndarray,
+    mu: float,
+    du: np.ndarray,
+    dmu: float,
+    alpha: float,
+    current: float,
+    stiffness: bool = True,
+) -> tuple[Trial | None, float]:
+    """The point alpha (du, dmu) along the step and its merit (None and inf where it cannot
+    be evaluated or its merit is not defined); its evaluation with the tangent if
+    ``stiffness``."""
+    trial_u = u + alpha * du
+    trial_mu = merit.project(trial_u, mu + alpha * dmu)
+    if not (math.isfinite(trial_mu) and constraint.admits(trial_mu)):
+        return None, math.inf
+    problem = problem_at(trial_mu)
+    trial = try_evaluate(problem, trial_u, stiffness=stiffness)
+    if trial is None:
+        return None, math.inf
+    lin = constraint(trial_u, trial_mu)
+    value = merit.value(trial, trial_u, trial_mu, lin.value)
+    if not math.isfinite(value):
+        return None, math.inf
+    return (trial_u, trial_mu, problem, trial, lin), value
+
+
 def _line_search(
     problem_at: Callable[[float], SteppedProblem],
     constraint: Constraint,
@@ -321,23 +361,18 @@ def _line_search(
     dmu: float,
     current: float,
     slope: float,
-) -> tuple[np.ndarray, float, SteppedProblem, Evaluation, Linearised] | None:
-    """The longest of the fractions 1, 1/2, ... of the step (du, dmu) whose merit falls by
-    Armijo's fraction of what its slope predicts (any finite merit, where the current one is
-    infinite); the new point, its problem, evaluation and constraint, or None."""
-    alpha = 1.0
+) -> Trial | None:
+    """The longest of the fractions 1/2, 1/4, ... of a step whose full length was rejected
+    that lowers the merit by Armijo's fraction of what its slope predicts; the new point, its
+    problem, evaluation and constraint, or None."""
+    alpha = 0.5
     for _ in range(_HALVINGS):
-        trial_u = u + alpha * du
-        trial_mu = merit.project(trial_u, mu + alpha * dmu)
-        if math.isfinite(trial_mu) and constraint.admits(trial_mu):
-            problem = problem_at(trial_mu)
-            trial = try_evaluate(problem, trial_u)
-            if trial is not None:
-                lin = constraint(trial_u, trial_mu)
-                value = merit.value(trial, trial_u, trial_mu, lin.value)
-                if math.isfinite(value) and (
-                    not math.isfinite(current) or value <= current + _SUFFICIENT * alpha * slope
-                ):
-                    return trial_u, trial_mu, problem, trial, lin
+        found, value = _try(problem_at, constraint, merit, u, mu, du, dmu, alpha, current, False)
+        if found is not None and (
+            not math.isfinite(current) or value <= current + _SUFFICIENT * alpha * slope
+        ):
+            trial_u, trial_mu, problem, _, lin = found
+            trial = try_evaluate(problem, trial_u)  # now with the tangent
+            return None if trial is None else (trial_u, trial_mu, problem, trial, lin)
         alpha *= 0.5
     return None

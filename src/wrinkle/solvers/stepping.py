@@ -406,8 +406,8 @@ def _limit_point_error(
     load = "" if describe_load is None else f" ({describe_load(factor)})"
     failure = ConvergenceError(
         f"limit point passed near load factor {factor:.6g}{load}: {what}; load control "
-        "cannot pass a maximum of the load: use [solver] control = \"arc-length\" or "
-        "\"volume\"",
+        'cannot pass a maximum of the load: use [solver] control = "arc-length" or '
+        '"volume"',
         history,
     )
     failure.reached = failure.limit_point = factor
