@@ -234,3 +234,24 @@ def test_history_and_summary_report_pressure_and_volume(tmp_path, capsys):
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["converged"] and summary["message"] == "converged to path parameter 1"
     assert summary["steps"][-1]["pressure"] == pytest.approx(float(rows[-1]["pressure"]))
+
+
+@pytest.mark.parametrize("name", ["balloon", "airbag_gas"])
+def test_the_examples_run_and_draw_the_pressure_volume_picture(tmp_path, capsys, name):
+    """examples/balloon.toml passes its maximum (4,970.7 N/m² on its facets, from the closed
+    form) and comes down to p_h(3); examples/airbag_gas.toml settles within 1 % of 5 kPa, the
+    pressure its amount of gas was chosen for."""
+    out = tmp_path / name
+    assert main(["run", str(ROOT / "examples" / f"{name}.toml"), "--out", str(out), "-q"]) == 0
+    assert main(["plot", str(out)]) == 0
+    assert (out / "pressure_volume.png").read_bytes().startswith(b"\x89PNG")
+    with open(out / "history.csv", newline="") as handle:
+        pressure = [float(row["pressure"]) for row in csv.DictReader(handle)]
+    if name == "balloon":
+        case = read_case(ROOT / "examples" / "balloon.toml")
+        ratio = 0.1 / effective_radius(case.model.mesh)
+        assert max(pressure) < ratio * REFERENCE.limit_pressure * (1 + 1e-6)
+        assert max(pressure) > 0.99 * ratio * REFERENCE.limit_pressure
+        assert pressure[-1] == pytest.approx(ratio * REFERENCE.pressure(3.0), rel=1e-4)
+    else:
+        assert pressure[-1] == pytest.approx(5000.0, rel=1e-2)
