@@ -18,11 +18,14 @@
   {support label: [Fx, Fy, Fz]}, "max_displacement", "stopped_by" ("residual" or
   "accuracy"), and for "accuracy" "accuracy_stop": {"residual" (relative to the force scale),
   "energy_gap", "discretisation_error", "contraction", "remaining_change": {quantity:
-  value}} (``wrinkle.solvers.stopping``)}], "wall_time" (seconds since the writer was made),
+  value}} (``wrinkle.solvers.stopping``), and "pressure" where the model has pressure loads
+  and "enclosed_volume" where they enclose a volume (``StepResult``)}], "wall_time" (seconds
+  since the writer was made), "reference_volume" where the membrane encloses a volume, and
   "units" and "case" if given}.
-- ``history.csv``: one row per step: step, load_factor, iterations, residual, taut, wrinkled,
-  slack, ``<support>_Fx/_Fy/_Fz`` per support, ``<probe>_ux/_uy/_uz`` per probe (mean
-  displacement of the probe's nodes).
+- ``history.csv``: one row per step: step, load_factor, iterations, residual, then pressure
+  and enclosed_volume where the summary has them, taut, wrinkled, slack,
+  ``<support>_Fx/_Fy/_Fz`` per support, ``<probe>_ux/_uy/_uz`` per probe (mean displacement
+  of the probe's nodes).
 
 Every file is written to a temporary file in ``out_dir`` and moved into place with
 ``os.replace``, so a crash or Ctrl-C leaves every finished step readable, and ``summary.json``
