@@ -5,7 +5,13 @@ and the closed form's on the faceted octant) or failed (with the load factor and
 the limit point the message names, and the faceted octant's limit pressure). A wrong answer
 would be a converged row above the limit pressure or with the wrong stretch.
 
+With ``--control arc-length`` the same sweep by arc length: below the limit pressure the
+path must end on the closed form's stretch; above it no point of the path carries the load,
+and the run must fail with the largest load the path carried (at most the facets' limit
+pressure).
+
     python benchmarks/limit_point_sweep.py --n 8
+    python benchmarks/limit_point_sweep.py --n 8 --control arc-length
 """
 
 from __future__ import annotations
@@ -28,6 +34,7 @@ from wrinkle.solvers import ConvergenceError  # noqa: E402
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=8, help="the octant's subdivisions")
+    parser.add_argument("--control", choices=("load", "arc-length"), default="load")
     args = parser.parse_args()
     reference = InflatedSphere(radius=0.1, thickness=1e-3, mu=4e5)
     print("steps | p / p_max | outcome | stretch | closed form | limit pressure | s")
@@ -38,7 +45,7 @@ def main() -> None:
                 {
                     "mesh": {"sphere": {"radius": 0.1, "n": args.n}},
                     "load": [{"kind": "pressure", "value": float(pressure)}],
-                    "solver": {"steps": steps},
+                    "solver": {"steps": steps, "control": args.control},
                 },
             )
             facets = effective_radius(case.model.mesh) / 0.1
@@ -49,6 +56,9 @@ def main() -> None:
             except ConvergenceError as error:
                 found = "-" if error.limit_point is None else f"{error.limit_point * pressure:.1f}"
                 outcome = "limit point" if "limit point passed" in str(error) else "FAILED"
+                if "load factor 1 not reached" in str(error):  # arc length: the largest load
+                    highest = float(str(error).split("was ")[1].split(" ")[0])
+                    outcome, found = "largest load", f"{highest * pressure:.1f}"
                 row = [outcome, "", "", f"{found} (facets {limit:.1f})"]
             else:
                 x = case.model.mesh.nodes + results.final.displacement.reshape(-1, 3)

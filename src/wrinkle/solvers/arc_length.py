@@ -9,7 +9,8 @@ Distances are measured in the scaled norm
 
 with U the displacement per unit load factor of the first step, so both parts weigh alike
 there. The first step is a load-controlled one (``solve_step``: from a flat sheet its
-globalisation is what finds the inflated shape). Each later step predicts along the secant
+globalisation is what finds the inflated shape), cut back while it fails or, for a membrane
+that encloses a volume, balances in an unstable state. Each later step predicts along the secant
 of the last converged increment, t = (du, dlambda) / s (its direction is kept through limit
 points, where dlambda changes sign), to the point at arc length ds, and corrects on the plane
 normal to t through that point,
@@ -31,11 +32,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
-from wrinkle.solvers.base import ConvergenceError
+from wrinkle.solvers.base import ConvergenceError, SolverResult, try_evaluate
 from wrinkle.solvers.bordered import Linearised, ProbeDisplacement, solve_bordered
 from wrinkle.solvers.control import LoadFamily, PathEnd, VolumeLevels, land
 from wrinkle.solvers.newton import RegularisedNewton
+from wrinkle.solvers.stability import unstable_modes
 from wrinkle.solvers.stepping import OnStep, StepController, solve_step
 from wrinkle.timing import Stopwatch
 
@@ -117,11 +120,7 @@ def follow_arc_length(
         def share(problem) -> None:
             problem.timer = timer
 
-    first = controller.first()
-    problem = system.at(first)
-    if timer is not None:
-        problem.timer = timer
-    solved = solve_step(problem, u, solver)
+    first, solved = _first_step(system, solver, controller, u, timer)
     if stop is not None and stop.displacement(solved.u) >= stop.target:
         landed = land(family, stop, (u, 0.0), (solved.u, first), solver, timer)
         on_step(landed.mu, landed.u, landed)
@@ -168,14 +167,23 @@ def follow_arc_length(
                 f"reached the stop: probe displacement {stop.target:.6g} at load factor "
                 f"{landed.mu:.6g}"
             )
+        crossing = None  # a state before load factor 1 is passed, and the state past it
         if stop is None and new_factor >= 1.0 - _END > factor:
+            crossing = ((u, factor), (new_u, new_factor))
+        elif stop is None and before_factor <= factor > new_factor and factor < 1.0 - _END:
+            # the load factor peaked between the neighbours of (u, factor): find its maximum,
+            # which may carry the full load although no converged point did
+            try:
+                peak = _peak(family, (before_u, before_factor), (new_u, new_factor), solver, share)
+            except ConvergenceError:
+                peak = (u, factor)  # not resolved: the largest converged point stands
+            highest = max(highest, peak[1])
+            if peak[1] >= 1.0 - _END:
+                crossing = ((before_u, before_factor), peak)
+        if crossing is not None:
+            (u_a, f_a), (u_b, f_b) = crossing
             landed = solve_bordered(
-                family,
-                LoadFactor(1.0),
-                u + (new_u - u) * _share_to(factor, new_factor),
-                1.0,
-                solver,
-                share,
+                family, LoadFactor(1.0), u_a + (u_b - u_a) * _share_to(f_a, f_b), 1.0, solver, share
             )
             on_step(1.0, landed.u, landed)
             return PathEnd("converged to load factor 1")
@@ -203,6 +211,95 @@ def follow_arc_length(
             f"{factor:.6g}, before the probe's displacement reached the stop {stop.target:.6g}"
         )
     raise _short_of_the_end(f"in {max_steps} steps", factor, highest, describe_load)
+
+
+@dataclass(frozen=True)
+class ChordPosition:
+    """c = d.(u - u_a) / d.d - s: the point at the fraction s of the chord d = u_b - u_a
+    between two states, measured along it (displacement control along the chord, the load
+    factor free)."""
+
+    u_a: np.ndarray
+    chord: np.ndarray
+    share: float
+
+    @property
+    def scale(self) -> float:
+        return 1.0
+
+    def admits(self, mu: float) -> bool:
+        return True
+
+    def __call__(self, u: np.ndarray, mu: float) -> Linearised:
+        gradient = self.chord / float(self.chord @ self.chord)
+        return Linearised(float(gradient @ (u - self.u_a)) - self.share, gradient, 0.0)
+
+
+def _peak(
+    family: LoadFamily,
+    before: tuple[np.ndarray, float],
+    after: tuple[np.ndarray, float],
+    solver: RegularisedNewton,
+    share: Callable | None,
+) -> tuple[np.ndarray, float]:
+    """The state of largest load factor between two converged states on either side of a
+    peak: the load factor maximised over the position along their chord (bounded
+    golden-section search, ``scipy.optimize.minimize_scalar``; each value a bordered solve
+    with ``ChordPosition``, from the last one solved)."""
+    (u_a, f_a), (u_b, f_b) = before, after
+    chord = u_b - u_a
+    last = [u_a + 0.5 * chord, max(f_a, f_b)]
+    found: dict[float, tuple[np.ndarray, float]] = {}
+
+    def minus_factor(position: float) -> float:
+        solved = solve_bordered(
+            family, ChordPosition(u_a, chord, position), last[0], last[1], solver, share
+        )
+        last[:] = [solved.u, solved.mu]
+        found[position] = (solved.u, solved.mu)
+        return -solved.mu
+
+    best = minimize_scalar(
+        minus_factor, bounds=(0.0, 1.0), method="bounded", options={"xatol": 1e-4}
+    )
+    return found.get(best.x, max(found.values(), key=lambda state: state[1]))
+
+
+def _first_step(
+    system: VolumeLevels,
+    solver: RegularisedNewton,
+    controller: StepController,
+    u: np.ndarray,
+    timer: Stopwatch | None,
+) -> tuple[float, SolverResult]:
+    """The load-controlled first step from u: its load factor and solve, cut back (by
+    ``controller``) while it fails or, for a membrane that encloses a volume, balances in an
+    unstable state (``wrinkle.solvers.stability``), which is on another branch than the one
+    from the reference state."""
+    first = controller.first()
+    enclosing = bool(getattr(system, "encloses_volume", False))
+    while True:
+        problem = system.at(first)
+        if timer is not None:
+            problem.timer = timer
+        try:
+            solved = solve_step(problem, u, solver)
+            ev = solved.evaluation
+            if ev.stiffness is None:
+                ev = try_evaluate(problem, solved.u) or ev
+            if enclosing and ev.stiffness is not None and unstable_modes(solver, ev, problem.free):
+                raise ConvergenceError("the first step balanced in an unstable state", [])
+            return first, solved
+        except ConvergenceError as error:
+            smaller = controller.after_failure(first)
+            if smaller is None:
+                raise ConvergenceError(
+                    f"arc length: the first, load-controlled step failed down to load factor "
+                    f"{first:.3g}: {error}",
+                    error.history,
+                ) from error
+            logger.info("arc length: first step to %.6g failed; cut to %.4g", first, smaller)
+            first = smaller
 
 
 def _short_of_the_end(
