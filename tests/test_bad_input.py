@@ -733,7 +733,8 @@ MORE = [
     (
         "stop displacement negative",
         append(
-            '[[probe]]\nname = "tip"\nnodes = "y == 1"\n[solver]\nstop = {probe = "tip", displacement = -1.0}'
+            '[[probe]]\nname = "tip"\nnodes = "y == 1"\n'
+            '[solver]\nstop = {probe = "tip", displacement = -1.0}'
         ),
         "'displacement' must be > 0",
     ),
@@ -771,7 +772,8 @@ MORE = [
     (
         "gas under volume control",
         append(
-            '[[load]]\nkind = "gas"\np0 = 2e5\nambient = 1e5\n[solver]\ncontrol = "volume"\nvolume = 1.0'
+            '[[load]]\nkind = "gas"\np0 = 2e5\nambient = 1e5\n'
+            '[solver]\ncontrol = "volume"\nvolume = 1.0'
         ),
         "a gas load is solved under control = 'load'",
     ),

@@ -390,3 +390,33 @@ def test_inflated_octant_follows_the_closed_form_below_its_limit_point() -> None
         errors[n] = worst
     assert errors[16] < 1.3e-4
     assert errors[8] / errors[16] > 4.0
+
+
+def test_the_ogden_sphere_reference_is_the_energy_principle_and_reduces():
+    """verification.references.ogden_sphere: p = dW_total/dV by central differences of the
+    sphere's strain energy (to 1e-8), and its one-term alpha = 2 and two-term (2, -2) cases
+    are the neo-Hookean and Mooney-Rivlin spheres (to round-off)."""
+    import math
+
+    from verification.references.ogden_sphere import TRELOAR, OgdenSphere
+    from verification.references.sphere import InflatedSphere
+
+    mu, alpha = zip(*TRELOAR, strict=True)
+    sphere = OgdenSphere(mu, alpha, 1e-3, 0.1)
+    for lam in (1.05, 1.4, 2.5):
+        h = 1e-6
+        dW = sphere.energy(lam + h) - sphere.energy(lam - h)
+        dV = 4.0 / 3.0 * math.pi * 0.1**3 * ((lam + h) ** 3 - (lam - h) ** 3)
+        assert float(sphere.pressure(lam)) == pytest.approx(dW / dV, rel=1e-8)
+    lam = np.linspace(1.0, 3.0, 9)
+    neo = OgdenSphere((4e5,), (2.0,), 1e-3, 0.1)
+    np.testing.assert_allclose(
+        neo.pressure(lam), InflatedSphere(4e5, 1e-3, 0.1).pressure(lam), rtol=1e-13, atol=1e-9
+    )
+    mooney = OgdenSphere((4e5, -4e4), (2.0, -2.0), 1e-3, 0.1)
+    np.testing.assert_allclose(
+        mooney.pressure(lam),
+        MooneyRivlinSphere(2e5, 2e4, 1e-3, 0.1).pressure(lam),
+        rtol=1e-13,
+        atol=1e-9,
+    )

@@ -10,7 +10,11 @@ x = 0, y = 0, z = 0; incompressible neo-Hookean) is inflated
 2. by arc length (``control = "arc-length"``), the pressure the load factor times the load's
    value, until the pole's displacement reaches 2 R (``stop``);
 3. by a sealed gas (``[[load]] kind = "gas"``), isothermal and adiabatic, whose equilibria lie
-   past the limit point (isothermal) and before it (adiabatic).
+   past the limit point (isothermal) and before it (adiabatic);
+4. made of Mooney-Rivlin rubber (C01/C10 = 0.1) by volume control to 64 V0, whose pressure has
+   a maximum and a minimum (``verification.references.mooney_rivlin_sphere``), and of Ogden's
+   three-term fit of Treloar's rubber by volume control to 27 V0
+   (``verification.references.ogden_sphere``).
 
 **The reference.** The faceted octant's enclosed volume is V = lambda^3 V0 for a uniform
 inflation x = lambda X of its facets, and its volume-to-area ratio that of a sphere of radius
@@ -40,10 +44,11 @@ from scipy.optimize import brentq, minimize_scalar
 
 from verification.levels import mesh_level
 from verification.references.mooney_rivlin_sphere import MooneyRivlinSphere
+from verification.references.ogden_sphere import TRELOAR, OgdenSphere
 from verification.references.sphere import LIMIT_STRETCH, InflatedSphere, effective_radius
 from verification.report import Benchmark, Check, Convergence, Outcome
 from wrinkle.case import Case, read_case_data
-from wrinkle.materials import MooneyRivlin
+from wrinkle.materials import MooneyRivlin, Ogden
 from wrinkle.mesh import mesh_size
 from wrinkle.plot import new_figure
 from wrinkle.results import Results
@@ -58,6 +63,7 @@ GASES = (("isothermal", 3.0e5, 1.0), ("adiabatic", 1.2e5, 1.4))  # name, p0, gam
 # C01 / C10 = 0.1: the pressure rises, falls and rises again (maximum at lambda = 1.4761,
 # minimum at 3.1426, verification.references.mooney_rivlin_sphere)
 MOONEY_RIVLIN = {"C10": 2.0e5, "C01": 2.0e4, "thickness": 1.0e-3}
+OGDEN_THICKNESS = 1.0e-3  # m, with Ogden's three-term fit of Treloar's rubber (TRELOAR)
 
 
 @dataclass
@@ -78,6 +84,7 @@ class _Level:
     rubber_curve: tuple[np.ndarray, np.ndarray]
     rubber_maximum: tuple[float, float]
     rubber_minimum: tuple[float, float]
+    ogden_curve: tuple[np.ndarray, np.ndarray]
 
 
 def _curve(results: Results, volume0: float) -> tuple[np.ndarray, np.ndarray]:
@@ -128,6 +135,10 @@ def _solve_level(case_path: Path, n: int) -> _Level:
     volume0 = case.model.discretise().reference_volume
     by_volume = case.solve()
     limit = _turning_point(case, by_volume, volume0)[:2]
+    ogden = mesh_level(case_path, n=n)
+    mu, alpha = zip(*TRELOAR, strict=True)
+    ogden.model.assign_material(Ogden(mu=mu, alpha=alpha, thickness=OGDEN_THICKNESS))
+    by_ogden = ogden.solve()
     rubber = mesh_level(case_path, {"solver": {"volume_ratio": 64.0}}, n=n)
     rubber.model.assign_material(MooneyRivlin(**MOONEY_RIVLIN))
     by_rubber = rubber.solve(steps=64)
@@ -155,7 +166,7 @@ def _solve_level(case_path: Path, n: int) -> _Level:
         final = gas.model.solve(settings).final
         gas_stretch[name] = (final.enclosed_volume / volume0) ** (1.0 / 3.0)
     not_taut = sum(
-        s.states[1] + s.states[2] for r in (by_volume, by_arc, by_rubber) for s in r.steps
+        s.states[1] + s.states[2] for r in (by_volume, by_arc, by_rubber, by_ogden) for s in r.steps
     )
     return _Level(
         n,
@@ -170,6 +181,7 @@ def _solve_level(case_path: Path, n: int) -> _Level:
         _curve(by_rubber, volume0),
         (maximum[0], maximum[1]),
         (minimum[0], minimum[1]),
+        _curve(by_ogden, volume0),
     )
 
 
@@ -267,6 +279,23 @@ def run(case: Path, out: Path, quick: bool) -> Outcome:
                 tolerance["limit_pressure"],
             ),
         ]
+    mu, alpha = zip(*TRELOAR, strict=True)
+    ogden = OgdenSphere(mu, alpha, OGDEN_THICKNESS, sphere.radius)
+    lam, p = finest.ogden_curve
+    ogden_errors = p / (ratio * ogden.pressure(lam)) - 1.0
+    worst = int(np.argmax(np.abs(ogden_errors)))
+    checks.append(
+        Check(
+            f"Ogden (Treloar's rubber, 3 terms), volume control: worst relative pressure error of "
+            f"{lam.size} points to lambda = {lam.max():.3f} (at lambda = {lam[worst]:.4f}), "
+            f"n = {finest.n}",
+            0.0,
+            "eq. (1) of verification.references.ogden_sphere, of the faceted octant",
+            float(ogden_errors[worst]),
+            tolerance["pressure"],
+            relative=False,
+        )
+    )
     for name, p0, gamma in GASES:
         checks.append(
             Check(
