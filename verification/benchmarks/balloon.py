@@ -8,7 +8,8 @@ x = 0, y = 0, z = 0; incompressible neo-Hookean) is inflated
 1. by volume control (the case's own ``[solver]``): the enclosed volume from V0 to 27 V0,
    the pressure the unknown;
 2. by arc length (``control = "arc-length"``), the pressure the load factor times the load's
-   value, until the pole's displacement reaches 2 R (``stop``);
+   value, until the pole's displacement reaches 2 R (``stop``); and to a pressure above the
+   maximum, which the path must fail to reach, naming the peak it located;
 3. by a sealed gas (``[[load]] kind = "gas"``), isothermal and adiabatic, whose equilibria lie
    past the limit point (isothermal) and before it (adiabatic);
 4. made of Mooney-Rivlin rubber (C01/C10 = 0.1) by volume control to 64 V0, whose pressure has
@@ -52,6 +53,7 @@ from wrinkle.materials import MooneyRivlin, Ogden
 from wrinkle.mesh import mesh_size
 from wrinkle.plot import new_figure
 from wrinkle.results import Results
+from wrinkle.solvers import ConvergenceError
 from wrinkle.solvers.bordered import solve_bordered
 from wrinkle.solvers.control import EnclosedVolume, PressureFamily, VolumeLagrangian
 
@@ -63,6 +65,7 @@ GASES = (("isothermal", 3.0e5, 1.0), ("adiabatic", 1.2e5, 1.4))  # name, p0, gam
 # C01 / C10 = 0.1: the pressure rises, falls and rises again (maximum at lambda = 1.4761,
 # minimum at 3.1426, verification.references.mooney_rivlin_sphere)
 MOONEY_RIVLIN = {"C10": 2.0e5, "C01": 2.0e4, "thickness": 1.0e-3}
+OVER_LOAD = 6000.0  # N/m^2, above the balloon's maximum: arc length must name the peak
 OGDEN_THICKNESS = 1.0e-3  # m, with Ogden's three-term fit of Treloar's rubber (TRELOAR)
 
 
@@ -85,6 +88,7 @@ class _Level:
     rubber_maximum: tuple[float, float]
     rubber_minimum: tuple[float, float]
     ogden_curve: tuple[np.ndarray, np.ndarray]
+    arc_limit: float
 
 
 def _curve(results: Results, volume0: float) -> tuple[np.ndarray, np.ndarray]:
@@ -155,6 +159,16 @@ def _solve_level(case_path: Path, n: int) -> _Level:
         steps=50,
     )
     by_arc = arc.model.solve(arc_settings, probes=arc.probes)
+    # above the maximum without a stop: the path fails, and names the peak it passed
+    over = mesh_level(case_path, {"load": [{"kind": "pressure", "value": OVER_LOAD}]}, n=n)
+    over_settings = dataclasses.replace(
+        over.settings, control="arc-length", volume_ratio=None, steps=20
+    )
+    try:
+        over.model.solve(over_settings)
+        arc_limit = np.nan  # a path that carried more than the maximum: the check fails
+    except ConvergenceError as error:
+        arc_limit = np.nan if error.limit_point is None else error.limit_point * OVER_LOAD
     gas_stretch = {}
     for name, p0, gamma in GASES:
         gas = mesh_level(
@@ -182,6 +196,7 @@ def _solve_level(case_path: Path, n: int) -> _Level:
         (maximum[0], maximum[1]),
         (minimum[0], minimum[1]),
         _curve(by_ogden, volume0),
+        arc_limit,
     )
 
 
@@ -244,6 +259,14 @@ def run(case: Path, out: Path, quick: bool) -> Outcome:
             ratio * sphere.limit_pressure,
             "eq. (5), of the faceted octant",
             finest.limit[1],
+            tolerance["limit_pressure"],
+        ),
+        Check(
+            f"limit pressure (N/m²) by arc length to {OVER_LOAD:g} N/m² (the peak of the path, "
+            f"which fails), n = {finest.n}",
+            ratio * sphere.limit_pressure,
+            "eq. (5), of the faceted octant",
+            finest.arc_limit,
             tolerance["limit_pressure"],
         ),
         Check(

@@ -308,7 +308,8 @@ def _short_of_the_end(
     highest: float,
     describe_load: Callable[[float], str] | None,
 ) -> ConvergenceError:
-    """The error of an arc-length path that did not reach load factor 1 ``when``."""
+    """The error of an arc-length path that did not reach load factor 1 ``when``; its
+    ``limit_point`` is the largest load factor on the path."""
     load = "" if describe_load is None else f" ({describe_load(highest)})"
     failure = ConvergenceError(
         f"arc length: load factor 1 not reached {when}: the largest load factor on the path "
@@ -317,6 +318,7 @@ def _short_of_the_end(
         [],
     )
     failure.reached = factor
+    failure.limit_point = highest
     return failure
 
 
