@@ -149,6 +149,13 @@ class _Reader:
             self.fail(where, f"'{key}' must be a string, got {value!r}")
         return value
 
+    def choice(self, table: dict, key: str, where: str, choices) -> str:
+        """A string that must be one of ``choices``."""
+        value = self.string(table, key, where)
+        if value not in choices:
+            self.fail(where, f"unknown {key} '{value}' (one of {', '.join(choices)})")
+        return value
+
     def vector(self, table: dict, key: str, where: str, allow_free=False, expressions=False):
         """A list of 3 numbers (or expression strings, or "free" where allowed)."""
         value = table[key]
@@ -510,9 +517,7 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
         reader.fail(where, "must be a table")
     if "model" not in table:
         reader.fail(where, "missing key 'model' (one of " + ", ".join(MATERIAL_MODELS) + ")")
-    name = reader.string(table, "model", where)
-    if name not in MATERIAL_MODELS:
-        reader.fail(where, f"unknown model '{name}' (one of " + ", ".join(MATERIAL_MODELS) + ")")
+    name = reader.choice(table, "model", where, MATERIAL_MODELS)
     parameters = MATERIAL_MODELS[name]
     optional = {"model", "direction", "angle", "region", "bending"} | (
         {"lmbda"} if name == "neo-hookean" else set()
@@ -617,9 +622,7 @@ def _read_support(reader: _Reader, model: Model, table: dict, where: str) -> Non
 def _read_load(reader: _Reader, model: Model, table: dict, where: str) -> None:
     if "kind" not in table:
         reader.fail(where, "missing key 'kind' (one of " + ", ".join(LOAD_KINDS) + ")")
-    kind = reader.string(table, "kind", where)
-    if kind not in LOAD_KINDS:
-        reader.fail(where, f"unknown kind '{kind}' (one of " + ", ".join(LOAD_KINDS) + ")")
+    kind = reader.choice(table, "kind", where, LOAD_KINDS)
     required, optional = LOAD_KINDS[kind]
     reader.keys(table, where, required | {"kind"}, optional)
     mesh = model.mesh
@@ -671,18 +674,15 @@ def _read_solver(reader: _Reader, table: dict) -> SolverSettings:
         reader.fail(where, "must be a table")
     reader.keys(table, where, set(), SOLVER_KEYS)
     solver: dict[str, Any] = {}
-    if "method" in table:
-        method = reader.string(table, "method", where)
-        if method not in SOLVERS:
-            reader.fail(where, f"unknown method '{method}' (one of {', '.join(SOLVERS)})")
-        solver["method"] = method
-    if "linear_solver" in table:
-        name = reader.string(table, "linear_solver", where)
-        if name != "auto" and name not in LINEAR_SOLVERS:
-            reader.fail(
-                where, f"unknown linear_solver '{name}' (one of auto, {', '.join(LINEAR_SOLVERS)})"
-            )
-        solver["linear_solver"] = name
+    choices = {
+        "method": list(SOLVERS),
+        "linear_solver": ["auto", *LINEAR_SOLVERS],
+        "control": list(CONTROLS),
+        "convergence": list(CONVERGENCE_TESTS),
+    }
+    for key, allowed in choices.items():
+        if key in table:
+            solver[key] = reader.choice(table, key, where, allowed)
     for key in ("steps", "max_iterations"):
         if key in table:
             solver[key] = reader.number(table, key, where, integer=True, minimum=1)
@@ -703,11 +703,6 @@ def _read_solver(reader: _Reader, table: dict) -> SolverSettings:
     ):
         if key in table:
             solver[key] = float(reader.number(table, key, where, positive=True))
-    if "control" in table:
-        control = reader.string(table, "control", where)
-        if control not in CONTROLS:
-            reader.fail(where, f"unknown control '{control}' (one of {', '.join(CONTROLS)})")
-        solver["control"] = control
     if "stop" in table:
         stop = table["stop"]
         if not isinstance(stop, dict) or set(stop) != {"probe", "displacement"}:
@@ -717,13 +712,6 @@ def _read_solver(reader: _Reader, table: dict) -> SolverSettings:
         probe = reader.string(stop, "probe", where + " stop")
         displacement = reader.number(stop, "displacement", where + " stop", positive=True)
         solver["stop"] = (probe, float(displacement))
-    if "convergence" in table:
-        test = reader.string(table, "convergence", where)
-        if test not in CONVERGENCE_TESTS:
-            reader.fail(
-                where, f"unknown convergence '{test}' (one of {', '.join(CONVERGENCE_TESTS)})"
-            )
-        solver["convergence"] = test
     for key in ("look_ahead", "nested"):
         if key in table:
             if not isinstance(table[key], bool):
