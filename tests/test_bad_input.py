@@ -446,8 +446,8 @@ MORE = [
         "[mesh]: 'levels' must be a list of mesh files",
     ),
     (
-        "levels without nested",
-        replace(R, R + '\nlevels = ["coarse.msh"]'),
+        "levels with nested = false",
+        chain(replace(R, R + '\nlevels = ["coarse.msh"]'), append("[solver]\nnested = false")),
         "[mesh]: 'levels' are the meshes of [solver] nested: set nested = true",
     ),
     (
@@ -684,6 +684,11 @@ MORE = [
     ("convergence unknown", append('[solver]\nconvergence = "energy"'), "unknown convergence"),
     ("convergence a number", append("[solver]\nconvergence = 1"), "convergence"),
     ("accuracy without nested", append('[solver]\nconvergence = "accuracy"'), "nested = true"),
+    (
+        "accuracy with nested = false",
+        append('[solver]\nconvergence = "accuracy"\nnested = false'),
+        "nested = true",
+    ),
     ("accuracy_energy 2", append("[solver]\naccuracy_energy = 2.0"), "accuracy_energy"),
     ("accuracy_change 0.5", append("[solver]\naccuracy_change = 0.5"), "accuracy_change"),
     ("accuracy_change 0", append("[solver]\naccuracy_change = 0.0"), "accuracy_change"),

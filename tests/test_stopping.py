@@ -129,7 +129,7 @@ def test_a_window_below_two_is_refused():
 
 def test_the_accuracy_stop_needs_a_coarser_mesh():
     with pytest.raises(ValueError, match="nested"):
-        SolverSettings(convergence="accuracy")
+        SolverSettings(convergence="accuracy", nested=False)
     with pytest.raises(ValueError, match="convergence"):
         SolverSettings(convergence="energy", nested=True)
     with pytest.raises(ValueError, match="accuracy_change"):

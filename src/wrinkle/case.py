@@ -371,11 +371,18 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
             + ")",
         )
     coarse, level_names = [], []
-    if level_files and not settings.nested:
+    if level_files and settings.nested is False:
         reader.fail(
             "[mesh]", "'levels' are the meshes of [solver] nested: set nested = true to use them"
         )
-    if settings.nested:
+    nests = settings.nests(bool(level_files), times > 0, bool(np.any(model.bending > 0)))
+    if settings.convergence == "accuracy" and not nests:
+        reader.fail(
+            "[solver]",
+            "convergence = 'accuracy' needs nested = true and coarser meshes ([mesh] refine "
+            ">= 1 or [mesh] levels): the discretisation error is estimated from them",
+        )
+    if nests:
         if times == 0 and not level_files:
             reader.fail(
                 "[solver]",
@@ -714,8 +721,9 @@ def _read_solver(reader: _Reader, table: dict) -> SolverSettings:
         solver["stop"] = (probe, float(displacement))
     for key in ("look_ahead", "nested"):
         if key in table:
-            if not isinstance(table[key], bool):
-                reader.fail(where, f"'{key}' must be true or false, got {table[key]!r}")
+            if not (isinstance(table[key], bool) or (key == "nested" and table[key] == "auto")):
+                values = 'true, false or "auto"' if key == "nested" else "true or false"
+                reader.fail(where, f"'{key}' must be {values}, got {table[key]!r}")
             solver[key] = table[key]
     try:
         return SolverSettings(**solver)

@@ -658,8 +658,9 @@ class Model:
         ``on_step(step_result)`` is called after each converged step. coarse: models of
         coarser meshes of the same reference surface, coarsest first, each with fewer
         elements than the next and the last fewer than this model's (nested by refinement or
-        not: ``wrinkle.sequencing.level_transfer``), from which the first step starts: used,
-        and needed, by ``nested=True``, from the reference state only (u0 None). probes:
+        not: ``wrinkle.sequencing.level_transfer``), from which the first step starts: used
+        by ``nested=True`` (which needs them) and ``nested="auto"`` (the default), from the
+        reference state only (u0 None). probes:
         {name: node indices} watched, with every displacement and the reactions, by the
         accuracy stop (``convergence="accuracy"``) on the finer levels of a nested first
         step. Raises
@@ -668,7 +669,12 @@ class Model:
         coarse model not coarser than the next or off its surface.
         """
         settings = (settings or SolverSettings()).replace(**options)
-        if settings.nested and not coarse:
+        if settings.convergence == "accuracy" and not coarse:
+            raise ValueError(
+                "convergence = 'accuracy' needs the models of the coarser meshes (coarse=...): "
+                "the discretisation error is estimated from them"
+            )
+        if settings.nested is True and not coarse:
             raise ValueError(
                 "nested needs the models of the coarser meshes (coarse=...); a case file makes "
                 "them from [mesh] refine or [mesh] levels"
@@ -678,7 +684,7 @@ class Model:
         system.check_resolvable()
         results = Results(self)
         first_guess = None
-        if coarse and settings.nested and u0 is None:
+        if coarse and settings.nested is not False and u0 is None:
             first_guess = NestedStart(coarse, self, settings, results.stopwatch, probes)
 
         pressure_unknown = self.gas is not None or settings.control == "volume"

@@ -90,11 +90,14 @@ class SolverSettings:
     look_ahead (if the first step fails, solve the end of the path first and the levels below
     it downwards, before cutting back); nested: start the first load step from the solution of
     coarser meshes (``Model.solve``'s ``coarse``; a case file makes them from ``[mesh]
-    refine`` and ``[mesh] levels``). convergence: "residual", or "accuracy" to let the accuracy stop
-    (``wrinkle.solvers.stopping``) end the solves of the finer levels of a nested first
-    step, with accuracy_energy (eta, the fraction of the discretisation error of the energy
-    that may remain) and accuracy_change (the largest remaining change of a probe or
-    reaction, relative to the largest displacement or the force scale).
+    refine`` and ``[mesh] levels``): True, False, or "auto" (the default: on where coarser
+    models are given; a case file gives them for ``[mesh] levels``, and for ``[mesh] refine``
+    where the sheet has bending stiffness, ``nests``). convergence: "residual", or
+    "accuracy" to let the accuracy stop (``wrinkle.solvers.stopping``) end the solves of the
+    finer levels of a nested first step, with accuracy_energy (eta, the fraction of the
+    discretisation error of the energy that may remain) and accuracy_change (the largest
+    remaining change of a probe or reaction, relative to the largest displacement or the
+    force scale).
     control: "load" (the load factor grows over the steps), "arc-length" (the load factor
     is an unknown and the path may pass limit points; ``steps`` sets the first increment,
     and is the largest number of steps with ``stop``, ARC_LENGTH_STEPS times it without) or
@@ -117,7 +120,7 @@ class SolverSettings:
     growth: float = 2.0
     target_iterations: int = 6
     look_ahead: bool = True
-    nested: bool = False
+    nested: bool | str = "auto"
     convergence: str = "residual"
     accuracy_energy: float = 0.1
     accuracy_change: float = 1e-4
@@ -175,7 +178,11 @@ class SolverSettings:
                 "an integer >= 0",
             ),
             ("look_ahead", lambda: isinstance(self.look_ahead, bool), "true or false"),
-            ("nested", lambda: isinstance(self.nested, bool), "true or false"),
+            (
+                "nested",
+                lambda: isinstance(self.nested, bool) or self.nested == "auto",
+                'true, false or "auto"',
+            ),
             (
                 "convergence",
                 lambda: self.convergence in CONVERGENCE_TESTS,
@@ -227,7 +234,7 @@ class SolverSettings:
                 raise ValueError(
                     f"solver {name} must be {requirement}, got {getattr(self, name)!r}"
                 )
-        if self.convergence == "accuracy" and not self.nested:
+        if self.convergence == "accuracy" and self.nested is False:
             raise ValueError(
                 "solver convergence = 'accuracy' needs nested = true: the mesh's discretisation "
                 "error is estimated from the solution of the coarser mesh"
@@ -246,6 +253,15 @@ class SolverSettings:
                 f"solver method = {self.method!r} cannot follow control = {self.control!r} or "
                 "a stop: arc length, volume control and stops use method = 'newton'"
             )
+
+    def nests(self, levels: bool, refined: bool, bending: bool) -> bool:
+        """Whether a case nests its first step: nested True, or "auto" with ``levels`` given
+        or the mesh ``refined`` and the sheet with ``bending``. Nesting pays with bending at
+        every size measured (docs/solvers.md, mesh sequencing) and costs more for a pure
+        membrane, whose interpolated start has none of the finer mesh's folds."""
+        if self.nested == "auto":
+            return levels or (refined and bending)
+        return bool(self.nested)
 
     def replace(self, **changes: Any) -> SolverSettings:
         """A copy with some fields changed (values None are ignored); TypeError for a name
