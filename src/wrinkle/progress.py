@@ -9,9 +9,10 @@ __all__ = ["Progress"]
 
 
 class Progress:
-    """Reports each converged load step: step, load factor, iterations, residual and the
-    numbers of wrinkled and slack elements. On a terminal the line is redrawn in place as a
-    bar; otherwise one line per step is printed. ``quiet`` prints nothing."""
+    """Reports each converged load step: step, load factor, the pressure where the model
+    has one, iterations, residual and the numbers of wrinkled and slack elements. On a
+    terminal the line is redrawn in place as a bar; otherwise one line per step is printed.
+    ``quiet`` prints nothing."""
 
     def __init__(self, stream=None, quiet: bool = False, width: int = 24):
         self.stream = stream if stream is not None else sys.stderr
@@ -27,9 +28,11 @@ class Progress:
         if self.quiet:
             return
         _, wrinkled, slack = step.states
+        pressure = getattr(step, "pressure", None)
         text = (
             f"step {self.count:3d}  load factor {step.load_factor:7.4f}  "
-            f"iterations {step.iterations:3d}  residual {step.residual:9.2e}  "
+            + ("" if pressure is None else f"pressure {pressure:.4g}  ")
+            + f"iterations {step.iterations:3d}  residual {step.residual:9.2e}  "
             f"wrinkled {wrinkled}  slack {slack}  ({time.perf_counter() - self.start:.1f} s)"
         )
         if self.terminal:
