@@ -288,3 +288,23 @@ def test_the_examples_run_and_draw_the_pressure_volume_picture(tmp_path, capsys,
         assert pressure[-1] == pytest.approx(ratio * REFERENCE.pressure(3.0), rel=1e-4)
     else:
         assert pressure[-1] == pytest.approx(5000.0, rel=1e-2)
+
+
+@pytest.mark.parametrize("control", ["load", "volume"])
+def test_a_stop_lands_on_the_probes_displacement_under_load_and_volume_control(control):
+    """stop = {pole, 0.01} (a stretch of about 1.1): the step that passes it is solved again
+    for its unknown (the load factor, or the pressure) and the path ends there, on the closed
+    form's curve: the pole exactly at the stop, the pressure at the volume's stretch within
+    3e-4 of p_h."""
+    solver = {"steps": 10, "stop": {"probe": "pole", "displacement": 0.01}}
+    if control == "volume":
+        case = balloon(control="volume", volume_ratio=8.0, **solver)
+    else:
+        case = balloon(load={"kind": "pressure", "value": 4500.0}, **solver)
+    results = case.solve()
+    assert results.end.message.startswith("reached the stop")
+    pole = results.final.displacement.reshape(-1, 3)[case.probes["pole"]].mean(axis=0)
+    assert np.linalg.norm(pole) == pytest.approx(0.01, rel=1e-8)
+    assert results.final.load_factor < 1.0
+    stretch, error = stretch_and_error(case, results)
+    assert abs(error[-1]) < 3e-4 and 1.05 < stretch[-1] < 1.2
