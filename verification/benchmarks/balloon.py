@@ -423,6 +423,6 @@ def _text(sphere: InflatedSphere, levels: list[_Level], quick: bool) -> str:
 
 BENCHMARK = Benchmark(
     "balloon",
-    "Neo-Hookean balloon past its limit point: volume control, arc length, gas",
+    "Rubber balloons past their limit point: volume control, arc length, gas",
     run,
 )
