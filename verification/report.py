@@ -61,6 +61,11 @@ class Check:
     def passed(self) -> bool:
         return bool(np.isfinite(self.value)) and self.error <= self.tolerance
 
+    @classmethod
+    def none_of(cls, quantity: str, count: int, source: str) -> Check:
+        """A count that must be zero (elements not taut, say), checked exactly."""
+        return cls(quantity, 0.0, source, float(count), 0.0, relative=False)
+
 
 @dataclass
 class Convergence:
