@@ -15,15 +15,20 @@ is found with one factorisation of K and two solves (block elimination, as in Cr
 Non-linear Finite Element Analysis of Solids and Structures, vol. 1, 1991, section 9.3):
 K a = R, K b = q, dmu = -(c + g.a) / (g.b + c'), du = a + dmu b.
 
-The bordered system has no potential that Newton's step descends (the volume-controlled
-balloon on its falling branch is a saddle of the energy), so the step is globalised on the
-merit |R|^2 + (w c)^2, w = F / c_scale converting c to a force (F the force scale): a step is
-halved until the merit falls by a sufficient fraction of what the linearisation predicts
-(Armijo's test on the Gauss-Newton model, Nocedal & Wright, Numerical Optimization, 2006,
-sections 3.1 and 11.2); where no fraction of the step will do, K is regularised with the
-Newton solver's metric (``RegularisedNewton.regularised``) and the step taken again. A solve
-ends where the residual passes the usual test (``is_converged``) and |c| <= tolerance times
-the constraint's scale, in an admissible state.
+The bordered system is not, in general, the stationarity of one potential (the
+volume-controlled balloon on its falling branch is a saddle of the energy), so each equation
+brings its own merit (``Merit``): the residual's |R|^2 + (w c)^2 (``ResidualMerit``, w = F /
+c_scale converting c to a force, F the force scale of the first step), or, where there is a
+potential, one built on the energy (the augmented Lagrangian of volume control, the total
+energy of a gas load: ``wrinkle.solvers.control``). K is regularised, K + theta M, and the
+step judged, by the Newton solver's own rules (``RegularisedNewton``: theta from 1e-8 of its
+metric; the gain ratio of the merit's decrease to its quadratic model's, -slope/2 for the
+Newton step; theta grown after a poor ratio, cut after a good one); a full step that does
+not lower the merit is halved up to six times (Armijo's test, Nocedal & Wright, Numerical
+Optimization, 2006, section 3.1) before theta grows and the step is factorised again. A
+decrease at round-off is judged by the residual merit. A solve ends where the residual
+passes the usual test (``is_converged``) and |c| <= tolerance times the constraint's scale,
+in an admissible state.
 """
 
 from __future__ import annotations
