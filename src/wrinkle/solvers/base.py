@@ -337,7 +337,7 @@ class RegularisedSolver(ABC):
         if self.linear is not None:
             self.linear.release()
 
-    def _time_with(self, problem: Problem) -> None:
+    def time_with(self, problem: Problem) -> None:
         """Charge the factorisations and solves to the problem's stopwatch (if it has one)."""
         self._timer = getattr(problem, "timer", None) or Stopwatch()
 
@@ -345,7 +345,7 @@ class RegularisedSolver(ABC):
         """One step from ev (an evaluation of problem) with the initial regularisation and no
         acceptance test, for a predictor; None if the regularised tangent cannot be
         factorised. (n_dofs,)"""
-        self._time_with(problem)
+        self.time_with(problem)
         step, _ = self.trial_step(ev, self.initial_theta(ev.tangent, problem.free), problem.free)
         return step
 
@@ -402,7 +402,7 @@ class RegularisedSolver(ABC):
         a start already in balance then costs no evaluation of the stiffness. stop: a rule
         that may end the solve before the residual test (``StopRule``), asked after each
         accepted iteration."""
-        self._time_with(problem)
+        self.time_with(problem)
         u = np.array(u0, dtype=float)
         if at_start is not None and is_converged(at_start, self.tolerance):
             log_iteration(self.method, 0, at_start, None)

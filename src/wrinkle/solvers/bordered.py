@@ -217,7 +217,7 @@ def solve_bordered(
     ev = try_evaluate(problem, u)
     if ev is None or not constraint.admits(mu):
         raise ConvergenceError(f"{method}: the starting point cannot be evaluated", [])
-    solver._time_with(problem)
+    solver.time_with(problem)
     lin = constraint(u, mu)
     history, constraint_history = [ev.residual_norm], [lin.value]
     free = problem.free

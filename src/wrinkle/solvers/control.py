@@ -8,10 +8,12 @@ balance and
 
     c = V(u) - V_target(t, mu) = 0,
 
-with V_target independent of mu. A gas load (``wrinkle.loads.Gas``) is the same equation with
-the gas law's volume at the gauge pressure mu, V_target = V_gas(t, mu) (the load factor t
-pumps the gas in). Either way, the other loads and the prescribed motions grow with t, and
-a step that fails is cut back as under load control (``StepController``).
+with V_target independent of mu, judged by the augmented Lagrangian of the energy
+(``VolumeLagrangian``). A gas load (``wrinkle.gas.Gas``) is the same equation with the gas
+law's volume at the gauge pressure mu, V_target = V_gas(t, mu) (the load factor t pumps the
+gas in), judged by the total energy with the gas's potential (``GasEnergy``). Either way,
+the other loads and the prescribed motions grow with t, and a step that fails is cut back
+as under load control (``StepController``).
 
 A stop at a probe's displacement (``[solver] stop``) ends any path at the step that reaches
 it: that step is solved again from the interpolation of the two states around the crossing,
