@@ -145,8 +145,8 @@ def plot_results(out_dir: str | os.PathLike) -> list[Path]:
     against the load factor, or the largest nodal displacement if there are no probes; and,
     where the history has the columns ``pressure`` and ``enclosed_volume`` (a closed
     membrane under pressure), ``pressure_volume.png``, the pressure against the enclosed
-    volume from the reference state. Returns the paths of the files. Raises ValueError if no
-    step has been written.
+    volume of each step, with the reference state. Returns the paths of the files. Raises
+    ValueError if no step has been written.
     """
     from wrinkle.mesh import meshio_read, require_meshio
     from wrinkle.output import (
@@ -410,19 +410,21 @@ def _plot_load_displacement(
 def _plot_pressure_volume(
     summary: dict, history_path: Path, units: dict, path: Path
 ) -> Path | None:
-    """The pressure against the enclosed volume of every step, from the reference state
-    (its volume at zero pressure); None where the history has not both columns."""
+    """The pressure against the enclosed volume of every step, and the reference state (its
+    volume at zero pressure) as a point of its own; None where the history has not both
+    columns."""
     header, history = _read_history(history_path)
     if not {"pressure", "enclosed_volume"} <= set(header):
         return None
     pressure = history[:, header.index("pressure")]
     volume = history[:, header.index("enclosed_volume")]
-    reference = summary.get("reference_volume")
-    if isinstance(reference, int | float):
-        pressure, volume = np.r_[0.0, pressure], np.r_[reference, volume]
     fig = new_figure(figsize=(6.5, 4.5), layout="constrained")
     ax = fig.subplots()
-    ax.plot(volume, pressure, "o-", ms=4)
+    ax.plot(volume, pressure, "o-", ms=4, label="converged steps")
+    reference = summary.get("reference_volume")
+    if isinstance(reference, int | float):  # not joined: the path between is not drawn
+        ax.plot([reference], [0.0], "s", mfc="none", color="0.3", label="reference state")
+        ax.legend(fontsize=8)
     length, force = _unit(units, "length"), _unit(units, "force")
     ax.set_xlabel(_with_unit("enclosed volume", f"{length}³" if length else ""))
     ax.set_ylabel(_with_unit("pressure", f"{force}/{length}²" if force and length else ""))
