@@ -782,6 +782,29 @@ MORE = [
         ),
         "a gas load is solved under control = 'load'",
     ),
+    # cables (issue 21)
+    (
+        "cable on unconnected nodes",
+        append('[[cable]]\nnodes = "y == 0 and x == 0 or y == 0 and x == 1"\nEA = 1.0'),
+        "[[cable]] 1: the 2 selected node(s) share no element edge",
+    ),
+    (
+        "cable in two pieces",
+        append('[[cable]]\nnodes = "x == 0 or x == 1"\nEA = 1.0'),
+        "the cable's nodes are not connected",
+    ),
+    ("cable EA zero", append('[[cable]]\nnodes = "y == 0"\nEA = 0.0'), "'EA' must be > 0"),
+    (
+        "cable prestress negative",
+        append('[[cable]]\nnodes = "y == 0"\nEA = 1.0\nprestress = -1.0'),
+        "'prestress' must be >= 0",
+    ),
+    (
+        "cable unknown key",
+        append('[[cable]]\nnodes = "y == 0"\nEA = 1.0\nforce = 2.0'),
+        "[[cable]] 1: unknown key 'force'",
+    ),
+    ("cable a number", top("cable = 3"), "[[cable]]: must be [[cable]] tables"),
     # top level
     ("title a number", top("title = 3"), "title"),
     ("verification a number", top("verification = 3"), "[verification]"),

@@ -167,6 +167,24 @@ class SparsityPattern:
         component = np.arange(DOFS_PER_NODE)
         return self._position(row_nodes[:, None], block[:, None], component, component)
 
+    def block_positions(self, row_nodes: np.ndarray, column_nodes: np.ndarray) -> np.ndarray:
+        """Data positions of the whole 3 x 3 blocks of the node pairs (a, b) = (row_nodes,
+        column_nodes), (m,) each, which must be blocks of the pattern (ValueError otherwise):
+        entry (3 a + i, 3 b + j) at [:, i, j]. Returns (m, 3, 3)."""
+        row_nodes = np.asarray(row_nodes, dtype=np.int64)
+        column_nodes = np.asarray(column_nodes, dtype=np.int64)
+        keys = row_nodes * self.n_nodes + column_nodes
+        block = np.searchsorted(self._keys, keys)
+        if np.any(self._keys[np.minimum(block, self._keys.size - 1)] != keys):
+            raise ValueError("a node pair is not in the sparsity pattern")
+        component = np.arange(DOFS_PER_NODE)
+        return self._position(
+            row_nodes[:, None, None],
+            block[:, None, None],
+            component[None, :, None],
+            component[None, None, :],
+        )
+
     def constraint_positions(self, constrained: np.ndarray) -> np.ndarray:
         """Data positions of all entries in a constrained row or column; constrained (n_dofs,)
         bool."""

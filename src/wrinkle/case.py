@@ -334,7 +334,7 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
         data,
         "top level",
         {"mesh", "material"},
-        {"support", "load", "probe", "solver", "title", "verification"},
+        {"support", "load", "cable", "probe", "solver", "title", "verification"},
     )
 
     base, times, units, level_files = _read_mesh(reader, data["mesh"], path.parent)
@@ -429,11 +429,29 @@ def _read_model(reader: _Reader, data: dict, mesh: Mesh) -> Model:
         _read_support(reader, model, table, f"[[support]] {index + 1}")
     for index, table in enumerate(reader.tables(data, "load")):
         _read_load(reader, model, table, f"[[load]] {index + 1}")
+    for index, table in enumerate(reader.tables(data, "cable")):
+        _read_cable(reader, model, table, f"[[cable]] {index + 1}")
     try:
         model.check_supports()
     except ValueError as error:
         reader.fail("[[support]]", str(error))
     return model
+
+
+def _read_cable(reader: _Reader, model: Model, table: dict, where: str) -> None:
+    """A [[cable]]: nodes (a selector or a node set, such as a gmsh line physical group),
+    EA, optional prestress (force) and label."""
+    if not isinstance(table, dict):
+        reader.fail(where, "must be a table")
+    reader.keys(table, where, {"nodes", "EA"}, {"prestress", "label"})
+    nodes = reader.nodes(model.mesh, table, where)
+    EA = reader.number(table, "EA", where, positive=True)
+    prestress = reader.number(table, "prestress", where, minimum=0) if "prestress" in table else 0
+    label = reader.string(table, "label", where) if "label" in table else str(table["nodes"])
+    try:
+        model.add_cables(nodes, float(EA), float(prestress), label)
+    except ValueError as error:
+        reader.fail(where, str(error))
 
 
 def _read_levels(reader: _Reader, files: list[Path], base: Mesh) -> list[tuple[Path, Mesh]]:

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike
 
 from wrinkle.assembly import DOFS_PER_NODE, SparsityPattern
 from wrinkle.bending import Bending, bending_stiffness, check_flat
+from wrinkle.cables import Cables, cable_edges
 from wrinkle.gas import Gas
 from wrinkle.kinematics import (
     ReferenceGeometry,
@@ -140,6 +141,8 @@ class Model:
         self.pressure = np.zeros(n)  # follower pressure at full load, per element
         self.gas: Gas | None = None  # a gas load (add_gas): its pressure on the elements above
         self._edge_follower: list[FollowerEdgeLoad] = []
+        # the cables (add_cables): per cable its label, edges (m, 2), EA and prestress force
+        self.cables: list[tuple[str, np.ndarray, float, float]] = []
         self.bending = np.zeros(n)  # bending stiffness D per element (add_bending)
         self._bending: Bending | None = None  # kept until the bending stiffness changes
         self._pattern: SparsityPattern | None = None  # the mesh's, kept while it lives
@@ -311,6 +314,45 @@ class Model:
             raise ValueError("a model with a gas load can have no other pressure load")
         self.pressure[self._element_indices(elements)] += value
         self._changed()
+
+    def add_cables(
+        self,
+        nodes: NodeSelection,
+        EA: float,
+        prestress: float = 0.0,
+        label: str | None = None,
+    ) -> None:
+        """A tension-only cable along the mesh edges between the selected nodes (a selector,
+        a node set such as a gmsh line physical group, indices or a mask), which must form
+        one connected path (``wrinkle.cables.cable_edges``): axial stiffness EA > 0 (force),
+        prestress N0 >= 0 (the force at its reference length). label: its name in the
+        summary (default "cable N"). ValueError for bad values or unconnected nodes."""
+        if not (np.isfinite(EA) and EA > 0):
+            raise ValueError(f"cable EA must be finite and > 0, got {EA!r}")
+        if not (np.isfinite(prestress) and prestress >= 0):
+            raise ValueError(f"cable prestress must be finite and >= 0, got {prestress!r}")
+        edges = cable_edges(self.mesh.triangles, self._node_indices(nodes), self.mesh.n_nodes)
+        name = label if label is not None else f"cable {len(self.cables) + 1}"
+        if any(existing == name for existing, *_ in self.cables):
+            raise ValueError(f"cable label {name!r} is used twice")
+        self.cables.append((name, edges, float(EA), float(prestress)))
+        self._changed()
+
+    def _cable_segments(self) -> Cables | None:
+        """The segments of every cable (``wrinkle.cables.Cables``), None without cables."""
+        if not self.cables:
+            return None
+        edges = np.concatenate([edges for _, edges, _, _ in self.cables])
+        counts = [len(edges) for _, edges, _, _ in self.cables]
+        length = np.linalg.norm(self.mesh.nodes[edges[:, 1]] - self.mesh.nodes[edges[:, 0]], axis=1)
+        return Cables(
+            edges,
+            length,
+            np.repeat([ea for _, _, ea, _ in self.cables], counts),
+            np.repeat([n0 for _, _, _, n0 in self.cables], counts),
+            np.repeat(np.arange(len(self.cables)), counts),
+            tuple(name for name, *_ in self.cables),
+        )
 
     def add_gas(self, gas: Gas, elements: ElementSelection = None) -> None:
         """An enclosed gas (``wrinkle.gas.Gas``) on ``elements`` (None = all): its gauge
@@ -500,6 +542,7 @@ class Model:
                 self.prescribed.copy(),
                 Loading(self.forces.copy(), self.pressure.copy(), list(self._edge_follower)),
                 self._bending,
+                self._cable_segments(),
             )
         return self._system
 

@@ -50,6 +50,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from wrinkle.cables import CableState
 from wrinkle.mesh import require_meshio
 from wrinkle.post import element_report, support_reactions
 from wrinkle.wrinkling import STATE_NAMES
@@ -169,7 +170,9 @@ class ResultWriter:
         # the pressure column where the model has pressure loads, the enclosed volume where
         # they enclose one (``DiscreteSystem.volume_closure``)
         self.has_pressure = getattr(model, "pressure_value", None) is not None
-        system = model.discretise() if self.has_pressure else None
+        self.system = model.discretise() if hasattr(model, "discretise") else None
+        self._cables: tuple[int, CableState] | None = None  # (step id, its state), reused
+        system = self.system if self.has_pressure else None
         self.has_volume = system is not None and system.volume_closure() is None
         self.reference_volume = (
             system.reference_volume if system is not None and self.has_volume else None
@@ -220,6 +223,9 @@ class ResultWriter:
                 number = None if value is None else float(value)
                 entry[name] = number
                 extra.append(number)
+        cables = self.cable_state(step)
+        if cables is not None and self.system is not None and self.system.cables is not None:
+            entry["cables"] = self.system.cables.summary(cables.axial, cables.taut)
         self.steps.append(entry)
         row: list = [index, float(step.load_factor), int(step.iterations), float(step.residual)]
         row += extra
@@ -233,6 +239,15 @@ class ResultWriter:
         self._write_history()
         self._write_summary(False, "running")
         return path
+
+    def cable_state(self, step) -> CableState | None:
+        """The cables' ``CableState`` at a step (None without cables), computed once."""
+        if self.system is None or self.system.cables is None:
+            return None
+        if self._cables is None or self._cables[0] != id(step):
+            u = np.asarray(step.displacement, dtype=float)
+            self._cables = (id(step), self.system.cable_state(u, tangent=False))
+        return self._cables[1]
 
     def finish(self, converged: bool, message: str) -> Path:
         """Write the final summary.json (wall time since the writer was made); returns it."""
@@ -251,14 +266,27 @@ class ResultWriter:
             "wrinkling_strain": report.wrinkling_strain,
             "thickness": report.thickness,
         }
+        cells = [("triangle", mesh.triangles)]
+        blocks = {key: [np.ascontiguousarray(value)] for key, value in cell_data.items()}
+        cables = self.cable_state(step)
+        if cables is not None and self.system is not None and self.system.cables is not None:
+            segments = self.system.cables.edges  # as line cells, after the triangles
+            cells.append(("line", segments))
+            for key, value in cell_data.items():
+                blocks[key].append(np.zeros((len(segments), *np.shape(value)[1:])))
+            blocks["cable_force"] = [np.zeros(mesh.n_elements), cables.axial]
+            blocks["cable_taut"] = [
+                np.zeros(mesh.n_elements, np.int32),
+                cables.taut.astype(np.int32),
+            ]
         vtu = meshio.Mesh(
             mesh.nodes,
-            [("triangle", mesh.triangles)],
+            cells,
             point_data={
                 "displacement": np.asarray(step.displacement, dtype=float).reshape(-1, 3),
                 "reaction": np.asarray(step.reactions, dtype=float).reshape(-1, 3),
             },
-            cell_data={key: [np.ascontiguousarray(value)] for key, value in cell_data.items()},
+            cell_data=blocks,
         )
         atomic_write(path, lambda temporary: meshio.write(temporary, vtu, file_format="vtu"))
 

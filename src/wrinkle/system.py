@@ -23,6 +23,7 @@ import scipy.sparse as sp
 from wrinkle import compiled
 from wrinkle.assembly import SparsityPattern
 from wrinkle.bending import Bending
+from wrinkle.cables import Cables, CableState
 from wrinkle.element import (
     KERNEL_BLOCK,
     ElementResult,
@@ -136,7 +137,8 @@ class DiscreteSystem:
     of all elements (material frames included); materials: one ``Wrinkling`` per group and
     material_of_element (n_elements,) the group of each element; constrained (n_dofs,) bool
     and prescribed (n_dofs,) the supported components and their values at load factor 1;
-    loading: the ``Loading`` at load factor 1; bending: the bending energy of the mean
+    loading: the ``Loading`` at load factor 1; cables: the model's tension-only cables
+    (``wrinkle.cables``), if any, along mesh edges; bending: the bending energy of the mean
     surface (``wrinkle.bending``), if the model has one; the pattern must then hold the node
     pairs it couples.
     """
@@ -152,6 +154,7 @@ class DiscreteSystem:
         prescribed: np.ndarray,
         loading: Loading,
         bending: Bending | None = None,
+        cables: Cables | None = None,
     ):
         self.mesh = mesh
         self.pattern = pattern
@@ -178,6 +181,16 @@ class DiscreteSystem:
         self._inverse_order = np.argsort(order) if len(self.groups) > 1 else None
         self.force_round_off = self._force_round_off()
         self._reference_volume: float | None = None  # enclosed by the pressurised elements
+        self.cables = cables
+        if cables is not None:
+            # the data positions of each segment's 6 x 6 tangent block
+            positions = np.empty((cables.n_segments, 6, 6), dtype=np.int64)
+            for i in (0, 1):
+                for j in (0, 1):
+                    positions[:, 3 * i : 3 * i + 3, 3 * j : 3 * j + 3] = pattern.block_positions(
+                        cables.edges[:, i], cables.edges[:, j]
+                    )
+            self._cable_positions = positions.ravel()
         self.bending = bending
         if bending is not None:
             rows, columns, values = bending.entries()
@@ -592,11 +605,36 @@ class DiscreteSystem:
         return float(self.loading.pressure[loaded] @ pressure_volume(x))
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
-        """Global internal force vector f* (membrane and bending), (n_dofs,)."""
+        """Global internal force vector f* (membrane, bending and cables), (n_dofs,)."""
         forces = self.pattern.assemble_vector(self.evaluate_elements(u, stiffness=False).forces)
         if self.bending is not None:
             forces += self.bending.forces(u)
+        if self.cables is not None:
+            forces += self.cable_state(u, tangent=False).forces
         return forces
+
+    def cable_state(self, u: np.ndarray, tangent: bool = True) -> CableState:
+        """The cables at the displacements u (n_dofs,) (``Cables.state``); ValueError
+        without cables."""
+        if self.cables is None:
+            raise ValueError("the model has no cables")
+        return self.cables.state(self.mesh.nodes + u.reshape(-1, 3), tangent)
+
+    def add_cables(self, u: np.ndarray, internal: np.ndarray, data: np.ndarray | None) -> float:
+        """Add the cables' internal forces at u (n_dofs,) to ``internal`` and their tangent
+        to the stiffness' CSR data (None: no tangent), in place; returns their energy (zero
+        without cables). A collapsed segment raises EvaluationFailure (the trial point is
+        then refused)."""
+        if self.cables is None:
+            return 0.0
+        try:
+            state = self.cable_state(u, tangent=data is not None)
+        except ValueError as error:
+            raise EvaluationFailure(str(error)) from None
+        internal += state.forces
+        if data is not None and state.blocks is not None:
+            np.add.at(data, self._cable_positions, state.blocks.ravel())
+        return state.energy
 
     def add_bending(self, u: np.ndarray, internal: np.ndarray, data: np.ndarray | None) -> float:
         """Add the bending's internal forces at u (n_dofs,) to ``internal`` and its stiffness
@@ -722,9 +760,10 @@ class StepProblem:
             )
         with timer.part(ASSEMBLY):
             internal = pattern.assemble_vector(result.forces)
-            bending_energy = system.add_bending(u, internal, data if stiffness else None)
+            other_energy = system.add_bending(u, internal, data if stiffness else None)
+            other_energy += system.add_cables(u, internal, data if stiffness else None)
         external = self.forces
-        energy = float(np.sum(result.energy) + bending_energy - self.forces @ u)
+        energy = float(np.sum(result.energy) + other_energy - self.forces @ u)
         if system.has_follower_loads:
             with timer.part(ELEMENTS):
                 follower, _ = system.follower_forces(
