@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import SQUARE_CASE
 from test_materials import fd_stress, fd_tangent
 from test_wrinkling import _points_in_state
 
 from verification.references.relaxed_energy import relax, stress_free_state
-from wrinkle import Model, element_report, material_response, rectangle
+from wrinkle import Model, element_report, material_response, read_case, rectangle
 from wrinkle.materials import NeoHookean, Prestressed, StVenantKirchhoff
 from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, Wrinkling
 
@@ -254,3 +255,17 @@ def test_prestressed_square_wrinkles_where_the_load_cancels_the_prestress(
         np.testing.assert_allclose(stress[:, 0, 0], expected[0], atol=1e-8 * n_xx)
         np.testing.assert_allclose(stress[:, 1, 1], expected[1], rtol=1e-8)
         np.testing.assert_allclose(stress[:, 0, 1], 0.0, atol=1e-8 * n_xx)
+
+
+@pytest.mark.parametrize(
+    "value, expected",
+    [("2.5", 2.5 * np.eye(2)), ("[3.0, 1.0, 0.5]", np.array([[3.0, 0.5], [0.5, 1.0]]))],
+)
+def test_case_file_prestress_per_region(tmp_path, value, expected):
+    """``prestress`` of a [material] table wraps its law in Prestressed, in each region."""
+    path = tmp_path / "case.toml"
+    path.write_text(SQUARE_CASE.replace("nu = 0.3", f"nu = 0.3\nprestress = {value}"))
+    material = read_case(path).model.materials[0].material
+    assert isinstance(material, Prestressed)
+    np.testing.assert_array_equal(material.prestress, expected)
+    assert isinstance(material.material, StVenantKirchhoff)

@@ -7,8 +7,9 @@ The relaxed (tension-field) energy of a hyperelastic membrane with energy densit
 (A. C. Pipkin, "The relaxed energy density for isotropic elastic membranes", IMA J. Appl.
 Math. 36:85-99, 1986; docs/method.md section 4). The minimiser ``A*`` is the "wrinkling strain"
 that the fine wrinkles absorb: ``A* = 0`` taut, ``rank A* = 1`` wrinkled, ``rank A* = 2`` slack
-(then ``C + A* = C0``, the stress-free state: I, or that of a prestressed material). The relaxed stress resultant is ``N(C + A*)`` where ``N = 2 dw/dC``;
-by the envelope theorem it equals ``2 dw_rel/dC``.
+(then ``C + A* = C0``, the stress-free state: I, or that of a prestressed material). The
+relaxed stress resultant is ``N(C + A*)`` where ``N = 2 dw/dC``; by the envelope theorem it
+equals ``2 dw_rel/dC``.
 
 This module finds ``A*`` by brute-force minimisation, without any knowledge of the modified
 deformation tensor of Roddeman et al. (1987), and then polishes it to near machine precision

@@ -80,7 +80,8 @@ class Prestressed:
     ``stress_free_state`` (2, 2) C0 with N(C0) = 0 (the state the wrinkling wrapper measures
     slackness from, ``wrinkle.wrinkling``). ValueError for a negative prestress or one for
     which no stress-free state is found (a prestress beyond what the inner law can release,
-    such as n >= E t / (2 (1 - nu)) for isotropic St Venant-Kirchhoff, where C0 would not be positive definite).
+    such as n >= E t / (2 (1 - nu)) for isotropic St Venant-Kirchhoff, where C0 would not be
+    positive definite).
     """
 
     def __init__(self, material: Material, prestress: float | tuple | list | np.ndarray):
