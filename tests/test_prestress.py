@@ -17,7 +17,7 @@ from test_materials import fd_stress, fd_tangent
 from test_wrinkling import _points_in_state
 
 from verification.references.relaxed_energy import relax, stress_free_state
-from wrinkle import Model, element_report, material_response, read_case, rectangle
+from wrinkle import Model, compiled, element_report, material_response, read_case, rectangle
 from wrinkle.materials import NeoHookean, Prestressed, StVenantKirchhoff
 from wrinkle.wrinkling import SLACK, TAUT, WRINKLED, Wrinkling
 
@@ -269,3 +269,36 @@ def test_case_file_prestress_per_region(tmp_path, value, expected):
     assert isinstance(material, Prestressed)
     np.testing.assert_array_equal(material.prestress, expected)
     assert isinstance(material.material, StVenantKirchhoff)
+
+
+@pytest.mark.skipif(not compiled.installed(), reason="numba not installed")
+def test_prestressed_square_same_with_and_without_compiled_kernels(monkeypatch):
+    """The Numba kernels take the stress and tangent as arrays, so they serve Prestressed as
+    any material: forces, stiffness and energy of a square with taut, wrinkled and slack
+    elements (shortened more and more along x and y towards x = 1, and twisted out of
+    plane) agree to round-off."""
+    model = _square([0.05, 0.02, 0.01], 0.0, fibre=(1.0, 1.0, 0.0), nx=8)
+    X = model.mesh.nodes
+    u = np.column_stack(
+        [-0.008 * X[:, 0] ** 2, -0.008 * X[:, 1] ** 2 * X[:, 0], 0.002 * X[:, 0] * X[:, 1]]
+    ).ravel()
+    evaluations = {}
+    for switch in ("0", "1"):
+        monkeypatch.setenv("WRINKLE_NUMBA", switch)
+        model.assign_material(model.materials[0])  # discretised anew with the kernel set
+        assert model.discretise().compiled == (switch == "1")
+        evaluations[switch] = model.discretise().at(1.0).evaluate(u)
+    numpy_ev, compiled_ev = evaluations["0"], evaluations["1"]
+    taut, wrinkled, slack = compiled_ev.states
+    assert taut > 0 and wrinkled > 0 and slack > 0, compiled_ev.states
+    np.testing.assert_allclose(
+        compiled_ev.residual,
+        numpy_ev.residual,
+        rtol=0,
+        atol=1e-12 * np.abs(numpy_ev.residual).max(),
+    )
+    K, K_numpy = compiled_ev.stiffness, numpy_ev.stiffness
+    np.testing.assert_allclose(
+        K.data, K_numpy.data, rtol=0, atol=1e-12 * np.abs(K_numpy.data).max()
+    )
+    assert compiled_ev.energy == pytest.approx(numpy_ev.energy, rel=1e-13)
