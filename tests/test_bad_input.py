@@ -574,6 +574,33 @@ MORE = [
     ("bending text", replace("nu = 0.3", 'nu = 0.3\nbending = "yes"'), "bending"),
     ("bending negative", replace("nu = 0.3", "nu = 0.3\nbending = -1.0"), "bending"),
     ("region unknown", replace("nu = 0.3", 'nu = 0.3\nregion = "skin"'), "skin"),
+    (
+        "prestress negative",
+        replace("nu = 0.3", "nu = 0.3\nprestress = -1.0"),
+        "[material]: prestress must be >= 0",
+    ),
+    (
+        "prestress tensor not positive semidefinite",
+        replace("nu = 0.3", "nu = 0.3\nprestress = [1.0, 1.0, 2.0]"),
+        "[material]: prestress [n11, n22, n12] = [1.0, 1.0, 2.0] must be positive semidefinite",
+    ),
+    (
+        "prestress tensor compressive",
+        replace("nu = 0.3", "nu = 0.3\nprestress = [1.0, -0.5, 0.0]"),
+        "must be positive semidefinite",
+    ),
+    (
+        "prestress two components",
+        replace("nu = 0.3", "nu = 0.3\nprestress = [1.0, 1.0]"),
+        "'prestress' must be a number or a list [n11, n22, n12]",
+    ),
+    ("prestress text", replace("nu = 0.3", 'nu = 0.3\nprestress = "high"'), "'prestress'"),
+    ("prestress nan", replace("nu = 0.3", "nu = 0.3\nprestress = nan"), "'prestress' must be"),
+    (
+        "prestress beyond the material",
+        replace("nu = 0.3", "nu = 0.3\nprestress = 10.0"),
+        "no stress-free state",
+    ),
     # [[support]]
     ("support without nodes", replace(FIRST, 'fix = ["x", "y", "z"]'), "nodes"),
     ("support without fix or displacement", replace(FIRST, 'nodes = "y == 0"'), "[[support]] 1"),

@@ -25,6 +25,7 @@ from verification.benchmarks import (
     inflated_cylinder,
     lame_annulus,
     membrane_beam,
+    prestressed_square,
     shear_stretch,
     simple_shear,
     sphere,
@@ -46,6 +47,7 @@ MODULES = (
     inflated_cylinder,
     sphere,
     balloon,
+    prestressed_square,
 )
 
 

@@ -7,7 +7,7 @@ Numerical Analysis", J. Appl. Mech. 54 (1987) 888-892 (docs/method.md).
 from importlib.metadata import PackageNotFoundError, version
 
 from wrinkle.case import Case, CaseError, read_case
-from wrinkle.materials import MooneyRivlin, NeoHookean, Ogden, StVenantKirchhoff
+from wrinkle.materials import MooneyRivlin, NeoHookean, Ogden, Prestressed, StVenantKirchhoff
 from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
 from wrinkle.post import element_report, material_response
@@ -33,6 +33,7 @@ __all__ = [
     "NeoHookean",
     "Ogden",
     "PointTransfer",
+    "Prestressed",
     "Results",
     "SolverSettings",
     "StVenantKirchhoff",

@@ -21,7 +21,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from wrinkle.gas import Gas
-from wrinkle.materials import MooneyRivlin, NeoHookean, Ogden, StVenantKirchhoff
+from wrinkle.materials import MooneyRivlin, NeoHookean, Ogden, Prestressed, StVenantKirchhoff
 from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh, annulus, check_fits, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
@@ -544,7 +544,7 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
         reader.fail(where, "missing key 'model' (one of " + ", ".join(MATERIAL_MODELS) + ")")
     name = reader.choice(table, "model", where, MATERIAL_MODELS)
     parameters = MATERIAL_MODELS[name]
-    optional = {"model", "direction", "angle", "region", "bending"} | (
+    optional = {"model", "direction", "angle", "region", "bending", "prestress"} | (
         {"lmbda"} if name == "neo-hookean" else set()
     )
     reader.keys(table, where, {*parameters, "thickness"}, optional)
@@ -575,6 +575,8 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
             material = NeoHookean(**values)
     except ValueError as error:
         reader.fail(where, str(error))
+    if "prestress" in table:
+        material = _read_prestress(reader, material, table, where)
     elements = reader.elements(model.mesh, table, where)
     direction = None
     if isinstance(table.get("direction"), str):  # per element, from the mesh's cell data
@@ -599,6 +601,24 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
         reader.fail(where, str(error))
     if "bending" in table:
         _read_bending(reader, model, table, where, elements)
+
+
+def _read_prestress(reader: _Reader, material: Material, table: dict, where: str) -> Prestressed:
+    """``prestress = n`` (isotropic, n >= 0) or ``[n11, n22, n12]`` (material frame,
+    positive semidefinite), force per unit length, around ``material``."""
+    value = table["prestress"]
+    if isinstance(value, list):
+        if len(value) != 3:
+            reader.fail(
+                where, f"'prestress' must be a number or a list [n11, n22, n12], got {value!r}"
+            )
+        prestress: float | list[float] = reader.numbers(table, "prestress", where)
+    else:
+        prestress = float(reader.number(table, "prestress", where))
+    try:
+        return Prestressed(material, prestress)
+    except ValueError as error:
+        reader.fail(where, str(error))
 
 
 def _read_bending(

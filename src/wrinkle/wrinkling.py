@@ -22,7 +22,13 @@ m = (w1^2/2, w2^2/2, w1 w2), g(e, phi, b) = W(phi) s(e') = N(C') w,
     dN/dE = D' - D' [b m', m] J^-1 W D'.
 
 States (Part II, section 3; docs/method.md section 5): taut if both principal stresses of the plain
-law are >= 0, else wrinkled if the major principal Green-Lagrange strain is > 0, else slack.
+law are >= 0, else wrinkled if the major principal Green-Lagrange strain measured from the
+material's stress-free state C0 is > 0, else slack. C0 = I for an ordinary material; a
+prestressed one (``wrinkle.materials.Prestressed``) gives its own ``stress_free_state``. With
+C0 = L L^T (Cholesky), that strain is (L^-1 C L^-T - I)/2, and "not > 0" means C0 - C is
+positive semidefinite: then C + A = C0 with A = C0 - C >= 0 reaches the stress-free state, the
+minimum of the relaxed energy min over A >= 0 of w(C + A), so the element carries nothing
+(Pipkin 1986). Slack elements get the energy and thickness of C0.
 """
 
 from __future__ import annotations
@@ -75,11 +81,13 @@ class WrinklingResponse:
     stress: (n, 2, 2) stress resultant N (force per unit reference length) that enters the
         nodal forces: plain law if taut, N(C + b w w) if wrinkled, zero if slack.
     tangent: (n, 3, 3) consistent dN/dE, Voigt (11, 22, 12); None unless asked for.
-    thickness: (n,) current thickness D (reference thickness for slack elements).
+    thickness: (n,) current thickness D (for slack elements: that of the stress-free state,
+        the reference thickness of an ordinary material).
     wrinkle_angle: (n,) angle phi of the reference wrinkle direction w = (cos phi, sin phi),
         radians, material frame; 0 where not wrinkled.
     wrinkle_parameter: (n,) b >= 0 of C' = C + b w (x) w; 0 where not wrinkled.
-    energy: (n,) relaxed strain energy per unit reference area.
+    energy: (n,) relaxed strain energy per unit reference area (for slack elements: that of
+        the stress-free state, zero for an ordinary material).
     """
 
     state: np.ndarray
@@ -134,7 +142,10 @@ class Wrinkling:
     """Tension-field (wrinkling) wrapper around a membrane ``Material``.
 
     ``response(C)`` gives state, stress, consistent tangent and thickness of a batch of
-    in-plane right Cauchy-Green tensors C, (n, 2, 2), material frame.
+    in-plane right Cauchy-Green tensors C, (n, 2, 2), material frame. A material with a
+    ``stress_free_state`` C0 (2, 2) other than I (``Prestressed``) is slack where C0 - C is
+    positive semidefinite (module docstring); ``slack_energy`` and ``slack_thickness`` are
+    its energy and thickness at C0 (0 and the reference thickness for an ordinary material).
     """
 
     def __init__(self, material: Material, tolerance: float = 1e-13):
@@ -154,6 +165,19 @@ class Wrinkling:
         #: |dN/dE| of the material at C = I, force per length
         self.reference_stiffness = float(np.linalg.norm(tangent))
         self.stress_noise = 64.0 * np.finfo(float).eps * self.reference_stiffness
+        # the stress-free state C0 (a prestressed material's; I otherwise): its Cholesky
+        # factor L, L^-1, and the energy and thickness that slack elements take from it
+        natural = getattr(material, "stress_free_state", None)
+        self._natural_factor: np.ndarray | None = None
+        self._natural_inverse: np.ndarray | None = None
+        self.slack_energy = 0.0
+        self.slack_thickness = float(material.thickness)
+        if natural is not None:
+            C0 = np.asarray(natural, dtype=float).reshape(1, 2, 2)
+            self._natural_factor = np.linalg.cholesky(C0[0])
+            self._natural_inverse = np.linalg.inv(self._natural_factor)
+            self.slack_energy = float(material.energy(C0)[0])
+            self.slack_thickness = float(material.response(C0, tangent=False).thickness[0])
 
     @property
     def thickness(self) -> float:
@@ -169,15 +193,39 @@ class Wrinkling:
         return self.response(C, tangent=False).energy
 
     def classify(self, C: np.ndarray, plain_stress: np.ndarray) -> np.ndarray:
-        """Element states by the paper's criterion (docs/method.md section 5), (n,) int8; stresses
-        and strains at the level of round-off count as zero."""
+        """Element states by the paper's criterion (docs/method.md section 5), the strain
+        measured from the stress-free state, (n,) int8; stresses and strains at the level of
+        round-off count as zero."""
         state = np.full(C.shape[0], TAUT, dtype=np.int8)
         minor_stress, _ = _symmetric_eigenvalues(plain_stress)
-        _, major_stretch = _symmetric_eigenvalues(C)
+        _, major_stretch = _symmetric_eigenvalues(self._from_stress_free(C))
         compressed = minor_stress < -self.stress_noise
         state[compressed] = WRINKLED
         state[compressed & (major_stretch <= 1.0 + 64.0 * np.finfo(float).eps)] = SLACK
         return state
+
+    def _from_stress_free(self, C: np.ndarray) -> np.ndarray:
+        """C measured from the stress-free state C0 = L L^T: L^-1 C L^-T, (n, 2, 2) (C itself
+        where C0 = I); its eigenvalues are the squared stretches from C0."""
+        if self._natural_inverse is None:
+            return C
+        (a, _), (b, c) = self._natural_inverse
+        out = np.empty_like(C)
+        out[:, 0, 0] = a * a * C[:, 0, 0]
+        out[:, 0, 1] = out[:, 1, 0] = a * (b * C[:, 0, 0] + c * C[:, 0, 1])
+        out[:, 1, 1] = b * b * C[:, 0, 0] + 2.0 * b * c * C[:, 0, 1] + c * c * C[:, 1, 1]
+        return out
+
+    def _least_stretched_angle(self, C: np.ndarray) -> np.ndarray:
+        """Angle (radians) of the reference direction w stretched least from the stress-free
+        state, (n,): the minor principal direction of C where C0 = I, else L v for the minor
+        eigenvector v of L^-1 C L^-T (so that C + b w (x) w is C0 + L (. + b' v (x) v) L^T)."""
+        angle = _minor_direction_angle(self._from_stress_free(C))
+        if self._natural_factor is None:
+            return angle
+        (l00, _), (l10, l11) = self._natural_factor
+        c, s = np.cos(angle), np.sin(angle)
+        return np.arctan2(l10 * c + l11 * s, l00 * c)
 
     def response(
         self, C: np.ndarray, tangent: bool = True, compiled: bool = False
@@ -204,7 +252,8 @@ class Wrinkling:
         stress[slack] = 0.0
         if stiffness is not None:
             stiffness[slack] = 0.0
-        thickness[slack] = self.material.thickness
+        thickness[slack] = self.slack_thickness
+        energy[slack] = self.slack_energy
 
         wrinkled = np.flatnonzero(state == WRINKLED)
         if wrinkled.size:
@@ -378,12 +427,13 @@ class Wrinkling:
         # first guess: the direction of the most compressive plain stress (exact for isotropy),
         # and b from the normal condition w.N'.w = 0 linearised at b = 0. Where both plain
         # principal stresses are compressive, only the stretched direction of C can carry the
-        # tension: start from the minor principal direction of C instead (from the stress
+        # tension: start from the direction stretched least from the stress-free state (the
+        # minor principal direction of C for an ordinary material) instead (from the stress
         # direction, Newton often ends on a compressive, inadmissible root there).
         phi = _minor_direction_angle(plain_stress)
         S00, S11, S01 = plain_stress[:, 0, 0], plain_stress[:, 1, 1], plain_stress[:, 0, 1]
         biaxial = np.flatnonzero((S00 + S11 < 0.0) & (S00 * S11 - S01 * S01 > 0.0))
-        phi[biaxial] = _minor_direction_angle(C[biaxial])
+        phi[biaxial] = self._least_stretched_angle(C[biaxial])
         c, s = np.cos(phi), np.sin(phi)
         b = _linearised_b(c, s, plain_stress, plain_tangent)
         converged = self._newton(e, phi, b, g_tolerance, np.ones(phi.shape, dtype=bool), (c, s))

@@ -7,8 +7,9 @@ The relaxed (tension-field) energy of a hyperelastic membrane with energy densit
 (A. C. Pipkin, "The relaxed energy density for isotropic elastic membranes", IMA J. Appl.
 Math. 36:85-99, 1986; docs/method.md section 4). The minimiser ``A*`` is the "wrinkling strain"
 that the fine wrinkles absorb: ``A* = 0`` taut, ``rank A* = 1`` wrinkled, ``rank A* = 2`` slack
-(then ``C + A* = I``). The relaxed stress resultant is ``N(C + A*)`` where ``N = 2 dw/dC``;
-by the envelope theorem it equals ``2 dw_rel/dC``.
+(then ``C + A* = C0``, the stress-free state: I, or that of a prestressed material). The
+relaxed stress resultant is ``N(C + A*)`` where ``N = 2 dw/dC``; by the envelope theorem it
+equals ``2 dw_rel/dC``.
 
 This module finds ``A*`` by brute-force minimisation, without any knowledge of the modified
 deformation tensor of Roddeman et al. (1987), and then polishes it to near machine precision
@@ -26,7 +27,7 @@ from scipy.optimize import minimize, root
 
 from wrinkle.materials.base import Material
 
-__all__ = ["RelaxedState", "relax", "shifted_energy"]
+__all__ = ["RelaxedState", "relax", "shifted_energy", "stress_free_state"]
 
 _IDENTITY = np.eye(2)
 
@@ -100,7 +101,34 @@ def _stiffness_scale(material: Material) -> float:
     return scale
 
 
-def _starting_points(C: np.ndarray) -> list[np.ndarray]:
+def stress_free_state(material: Material) -> np.ndarray:
+    """The stress-free state C0 (2, 2) of ``material``: the minimiser of w(C) over positive
+    definite C = L L^T, by BFGS on (L11, L21, L22) from L = I with the gradient of
+    ``shifted_energy`` (C = 0 + L L^T), then polished by ``scipy.optimize.root`` on N(C0) = 0.
+    I for an ordinary material; for a prestressed one (w = w_el + N0 : E) the state that the
+    prestress relaxes to."""
+    scale = _stiffness_scale(material)
+    zero = np.zeros((2, 2))
+
+    def objective(params: np.ndarray) -> tuple[float, np.ndarray]:
+        value, gradient = shifted_energy(material, zero, params)
+        return value / scale, gradient / scale
+
+    result = minimize(
+        objective, np.array([1.0, 0.0, 1.0]), jac=True, method="BFGS", options={"gtol": 1e-12}
+    )
+    L = _lower(result.x)
+    start = L @ L.T
+
+    def stress(x: np.ndarray) -> np.ndarray:
+        N = _stress(material, np.array([[x[0], x[2]], [x[2], x[1]]]))
+        return np.array([N[0, 0], N[1, 1], N[0, 1]]) / scale
+
+    x = root(stress, np.array([start[0, 0], start[1, 1], start[0, 1]]), method="hybr").x
+    return np.array([[x[0], x[2]], [x[2], x[1]]])
+
+
+def _starting_points(C: np.ndarray, C0: np.ndarray) -> list[np.ndarray]:
     """Nonzero starting points (L11, L21, L22); L = 0 is stationary and never used."""
     s = 0.3
     starts = [
@@ -114,13 +142,15 @@ def _starting_points(C: np.ndarray) -> list[np.ndarray]:
     minor = vectors[:, 0]
     root_b = np.sqrt(max(1.0 - eigenvalues[0], 0.01))
     starts.append(np.array([root_b * minor[0], root_b * minor[1], 0.1 * s]))  # isotropic guess
-    if eigenvalues[1] < 1.0:  # slack guess: L L^T = I - C
-        L = np.linalg.cholesky(_IDENTITY - C)
+    if np.linalg.eigvalsh(C0 - C)[0] > 0.0:  # slack guess: L L^T = C0 - C
+        L = np.linalg.cholesky(C0 - C)
         starts.append(np.array([L[0, 0], L[1, 0], L[1, 1]]))
     return starts
 
 
-def _minimise(material: Material, C: np.ndarray, scale: float) -> tuple[np.ndarray, float]:
+def _minimise(
+    material: Material, C: np.ndarray, scale: float, C0: np.ndarray
+) -> tuple[np.ndarray, float]:
     """Generic minimisation of w(C + L L^T) from several starts; returns (A, energy)."""
 
     def objective(params: np.ndarray) -> tuple[float, np.ndarray]:
@@ -128,7 +158,7 @@ def _minimise(material: Material, C: np.ndarray, scale: float) -> tuple[np.ndarr
         return value / scale, gradient / scale
 
     best_A, best_energy = np.zeros((2, 2)), _energy(material, C)
-    for start in _starting_points(C):
+    for start in _starting_points(C, C0):
         result = minimize(
             objective, start, jac=True, method="BFGS", options={"gtol": 1e-13, "maxiter": 2000}
         )
@@ -160,15 +190,17 @@ def _taut(material: Material, C: np.ndarray, stress_tol: float) -> _Candidate | 
     return state, bool(smallest >= 0.0)
 
 
-def _slack(material: Material, C: np.ndarray, energy_bound: float) -> _Candidate | None:
-    """A = I - C; admissible when I - C is positive semidefinite and w(I) is the minimum."""
-    if np.linalg.eigvalsh(C)[1] > 1.0:
+def _slack(
+    material: Material, C: np.ndarray, energy_bound: float, C0: np.ndarray
+) -> _Candidate | None:
+    """A = C0 - C; admissible when C0 - C is positive semidefinite and w(C0) is the minimum."""
+    if np.linalg.eigvalsh(C0 - C)[0] < 0.0:
         return None
-    energy = _energy(material, _IDENTITY)
+    energy = _energy(material, C0)
     if energy > energy_bound:
         return None
-    A = _IDENTITY - C
-    stress = _stress(material, _IDENTITY)
+    A = C0 - C
+    stress = _stress(material, C0)
     residual = float(np.linalg.norm(stress))
     return RelaxedState("slack", energy, A, stress, None, float(np.trace(A)), residual), True
 
@@ -215,6 +247,7 @@ def relax(
     C: np.ndarray,
     rank_tol: float = 1e-6,
     stress_tol: float = 1e-9,
+    stress_free: np.ndarray | None = None,
 ) -> RelaxedState:
     """Relaxed energy, stress and state of one in-plane right Cauchy-Green tensor.
 
@@ -226,8 +259,9 @@ def relax(
        positive semidefinite by construction) with BFGS and the analytic gradient
        N(C + L L^T) L (see ``shifted_energy``), from several nonzero starts, keeping the best;
     2. classify the minimiser by the rank of A (eigenvalues above ``rank_tol``);
-    3. polish: taut A = 0 (admissible if N(C) >= 0), slack A = I - C (admissible if the largest
-       eigenvalue of C is <= 1, w(I) being the minimum), wrinkled A = b w w^T with
+    3. polish: taut A = 0 (admissible if N(C) >= 0), slack A = C0 - C (C0 = I unless
+       ``stress_free`` is given; admissible if C0 - C is positive semidefinite, w(C0) being
+       the minimum), wrinkled A = b w w^T with
        w = (cos phi, sin phi) and N(C + b w w^T) w = 0 solved for (phi, b) with
        ``scipy.optimize.root`` from the minimiser's values (admissible if b > 0 and the
        uniaxial tension is >= 0).
@@ -244,6 +278,8 @@ def relax(
     C: (2, 2) in-plane right Cauchy-Green tensor in the material frame (dimensionless).
     rank_tol: eigenvalue of A (dimensionless) above which it counts towards the rank.
     stress_tol: tolerance on stresses, relative to the stiffness |dN/dE| at C = I.
+    stress_free: (2, 2) the material's stress-free state C0 where it is not I (a prestressed
+        material: ``stress_free_state``); the slack candidate is then A = C0 - C.
     Returns a ``RelaxedState``; raises RuntimeError if no state passes its checks.
     """
     C = np.asarray(C, dtype=float)
@@ -253,9 +289,10 @@ def relax(
     if np.linalg.eigvalsh(C)[0] <= 0.0:
         raise ValueError(f"C must be positive definite, got eigenvalues {np.linalg.eigvalsh(C)}")
 
+    C0 = _IDENTITY if stress_free is None else np.asarray(stress_free, dtype=float)
     scale = _stiffness_scale(material)
     abs_stress_tol = stress_tol * scale
-    A_min, energy_min = _minimise(material, C, scale)
+    A_min, energy_min = _minimise(material, C, scale, C0)
     energy_bound = energy_min + 1e-10 * scale
 
     eigenvalues, vectors = np.linalg.eigh(A_min)
@@ -268,7 +305,7 @@ def relax(
         b0 = max(1.0 - float(c_values[0]), 1e-6)
 
     taut = _taut(material, C, abs_stress_tol)
-    slack = _slack(material, C, energy_bound)
+    slack = _slack(material, C, energy_bound, C0)
     wrinkled = None
     if rank == 1 or not ((taut is not None and taut[1]) or slack is not None):
         wrinkled = _wrinkled(material, C, phi0, b0, scale, abs_stress_tol)

@@ -16,6 +16,7 @@ from wrinkle.materials.base import (
 from wrinkle.materials.mooney_rivlin import MooneyRivlin
 from wrinkle.materials.neo_hookean import NeoHookean
 from wrinkle.materials.ogden import Ogden
+from wrinkle.materials.prestress import Prestressed
 from wrinkle.materials.svk import StVenantKirchhoff
 
 __all__ = [
@@ -24,6 +25,7 @@ __all__ = [
     "MooneyRivlin",
     "NeoHookean",
     "Ogden",
+    "Prestressed",
     "StVenantKirchhoff",
     "as_cauchy_green_batch",
     "green_lagrange_voigt",
