@@ -16,6 +16,7 @@ Nodes are given as indices, a boolean mask, a node-set name or a selector such a
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -106,13 +107,15 @@ class Model:
     mesh: ``Mesh``; material: a ``Material`` (wrapped in ``Wrinkling``) or a ``Wrinkling`` for
     all elements (or None, then ``assign_material`` for each region); fibre_direction: (3,) or
     (n_elements, 3) vector projected onto each element as the material axis 1; fibre_angle:
-    radians (scalar or (n_elements,)) turning it about the element normal.
+    radians (scalar or (n_elements,)) turning it about the element normal; density: the
+    material's mass per unit volume, for the natural modes (``wrinkle.modes``).
 
     Attributes: ``constrained`` (n_dofs,) bool and ``prescribed`` (n_dofs,) the supported
     components and their values at load factor 1, ``forces`` (n_dofs,) the dead nodal forces
     at load factor 1, ``supports`` (``Support``), ``pressure`` (n_elements,) the follower
     pressure at load factor 1, ``bending`` (n_elements,) the bending stiffness D of the mean
-    surface (zero: a membrane; ``add_bending``). Change them through the methods, which keep
+    surface (zero: a membrane; ``add_bending``), ``density`` (n_elements,) the mass per unit
+    volume (NaN where not given; ``assign_material``). Change them through the methods, which keep
     the discrete system (``discretise``) up to date.
     """
 
@@ -122,6 +125,7 @@ class Model:
         material: Material | Wrinkling | None = None,
         fibre_direction: ArrayLike = (1.0, 0.0, 0.0),
         fibre_angle: ArrayLike = 0.0,
+        density: float | None = None,
     ):
         self.mesh = mesh
         n = mesh.n_elements
@@ -141,12 +145,13 @@ class Model:
         self.gas: Gas | None = None  # a gas load (add_gas): its pressure on the elements above
         self._edge_follower: list[FollowerEdgeLoad] = []
         self.bending = np.zeros(n)  # bending stiffness D per element (add_bending)
+        self.density = np.full(n, np.nan)  # mass per unit volume per element (assign_material)
         self._bending: Bending | None = None  # kept until the bending stiffness changes
         self._pattern: SparsityPattern | None = None  # the mesh's, kept while it lives
         self._geometry: ReferenceGeometry | None = None  # kept until the materials change
         self._system: DiscreteSystem | None = None  # kept until anything changes
         if material is not None:
-            self.assign_material(material)
+            self.assign_material(material, density=density)
 
     def _changed(self) -> None:
         self._system = None
@@ -179,14 +184,19 @@ class Model:
         elements: ElementSelection = None,
         fibre_direction: ArrayLike | None = None,
         fibre_angle: ArrayLike | None = None,
+        density: float | None = None,
     ) -> None:
         """Give ``elements`` (indices, mask or element-set name; None = all) a material and,
-        optionally, their own fibre direction ((3,) or (k, 3)) and angle (radians).
+        optionally, their own fibre direction ((3,) or (k, 3)) and angle (radians), and the
+        material's density (mass per unit volume, > 0), which the natural modes need
+        (``wrinkle.modes``; None: unknown).
 
         An isotropic material (``is_isotropic``) needs no fibre direction. For an anisotropic
         one the direction is checked here: ValueError naming the first element whose plane it
         is perpendicular to (or if it is zero), and what to set."""
         chosen = self._element_indices(elements)
+        if density is not None and not (math.isfinite(density) and density > 0):
+            raise ValueError(f"density must be finite and > 0, got {density}")
         wrinkling = material if isinstance(material, Wrinkling) else Wrinkling(material)
         direction = self._fibre_direction[chosen]
         if fibre_direction is not None:
@@ -206,6 +216,7 @@ class Model:
             self._fibre_direction[chosen] = direction
         if fibre_angle is not None:
             self._fibre_angle[chosen] = fibre_angle
+        self.density[chosen] = np.nan if density is None else float(density)
         self._geometry = None
         self._changed()
 
@@ -213,6 +224,20 @@ class Model:
     def materials(self) -> list[Wrinkling]:
         """The materials assigned, in order (``assign_material``)."""
         return list(self._materials)
+
+    def mass_per_area(self) -> np.ndarray:
+        """Mass per unit reference area of each element, rho t0 (n_elements,): its
+        material's density times its reference thickness. ValueError naming the first element
+        without a density (``assign_material(density=...)``)."""
+        missing = np.flatnonzero(~(self.density > 0))
+        if missing.size:
+            raise ValueError(
+                f"{missing.size} element(s) have no density, first: element {missing[0]}; give "
+                "the material's density (case file: [material] density; Python: "
+                "assign_material(..., density=...))"
+            )
+        thickness = np.array([m.thickness for m in self._materials])
+        return self.density * thickness[self._material_of_element]
 
     def _reference_geometry(self) -> ReferenceGeometry:
         missing = np.flatnonzero(self._material_of_element < 0)
