@@ -822,6 +822,11 @@ MORE = [
     ),
     ("cable EA zero", append('[[cable]]\nnodes = "y == 0"\nEA = 0.0'), "'EA' must be > 0"),
     (
+        "cable mass negative",
+        append('[[cable]]\nnodes = "y == 0"\nEA = 1.0\nmass_per_length = -1.0'),
+        "'mass_per_length' must be >= 0",
+    ),
+    (
         "cable prestress negative",
         append('[[cable]]\nnodes = "y == 0"\nEA = 1.0\nprestress = -1.0'),
         "'prestress' must be >= 0",
@@ -832,6 +837,68 @@ MORE = [
         "[[cable]] 1: unknown key 'force'",
     ),
     ("cable a number", top("cable = 3"), "[[cable]]: must be [[cable]] tables"),
+    # [modes] (issue 21, item 4): the base case has 6 free components
+    (
+        "modes count above the free dofs",
+        chain(
+            replace("thickness = 0.01", "thickness = 0.01\ndensity = 1000.0"),
+            append("[modes]\ncount = 7"),
+        ),
+        "'count' = 7 is more than the model's 6 free degrees of freedom",
+    ),
+    (
+        "modes count 0",
+        chain(
+            replace("thickness = 0.01", "thickness = 0.01\ndensity = 1000.0"),
+            append("[modes]\ncount = 0"),
+        ),
+        "[modes]: 'count' must be >= 1",
+    ),
+    (
+        "modes count a float",
+        chain(
+            replace("thickness = 0.01", "thickness = 0.01\ndensity = 1000.0"),
+            append("[modes]\ncount = 2.5"),
+        ),
+        "[modes]: 'count' must be an integer",
+    ),
+    (
+        "modes mass unknown",
+        chain(
+            replace("thickness = 0.01", "thickness = 0.01\ndensity = 1000.0"),
+            append('[modes]\ncount = 2\nmass = "heavy"'),
+        ),
+        "[modes]: unknown mass 'heavy'",
+    ),
+    (
+        "modes shift negative",
+        chain(
+            replace("thickness = 0.01", "thickness = 0.01\ndensity = 1000.0"),
+            append("[modes]\ncount = 2\nshift = -1.0"),
+        ),
+        "[modes]: 'shift' must be >= 0",
+    ),
+    ("modes a number", top("modes = 3"), "[modes]: must be a table"),
+    (
+        "modes without a density",
+        append("[modes]\ncount = 2"),
+        "[modes]: the natural modes need the mass: give [material] density",
+    ),
+    (
+        "density 0",
+        replace("thickness = 0.01", "thickness = 0.01\ndensity = 0.0"),
+        "[material]: 'density' must be > 0",
+    ),
+    (
+        "density negative",
+        replace("thickness = 0.01", "thickness = 0.01\ndensity = -1.0"),
+        "[material]: 'density' must be > 0",
+    ),
+    (
+        "density text",
+        replace("thickness = 0.01", 'thickness = 0.01\ndensity = "heavy"'),
+        "[material]: 'density' must be a number",
+    ),
     # top level
     ("title a number", top("title = 3"), "title"),
     ("verification a number", top("verification = 3"), "[verification]"),

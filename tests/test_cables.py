@@ -158,4 +158,4 @@ def test_a_case_with_a_cable_writes_its_forces(tmp_path, capsys):
     force = vtu.cell_data_dict["cable_force"]["line"]
     np.testing.assert_allclose(force, 50.0, rtol=1e-6)
     case = read_case(path)
-    assert [name for name, *_ in case.model.cables] == ["edge"]
+    assert [cable.label for cable in case.model.cables] == ["edge"]

@@ -29,7 +29,20 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-__all__ = ["CableState", "Cables", "cable_edges"]
+__all__ = ["Cable", "CableState", "Cables", "cable_edges"]
+
+
+@dataclass(frozen=True)
+class Cable:
+    """One cable as defined (``Model.add_cables``): its label, its mesh edges (m, 2), axial
+    stiffness EA (force), prestress N0 (force at the reference length) and mass per unit
+    reference length (mass / length; 0 for a massless cable)."""
+
+    label: str
+    edges: np.ndarray
+    EA: float
+    prestress: float
+    mass_per_length: float = 0.0
 
 
 def cable_edges(triangles: np.ndarray, nodes: np.ndarray, n_nodes: int) -> np.ndarray:
@@ -84,7 +97,8 @@ class CableState:
 class Cables:
     """Cable segments of a model (module docstring). edges (m, 2) node pairs; length (m,)
     reference lengths L0 (> 0); stiffness (m,) EA (> 0, force); prestress (m,) N0 (>= 0,
-    force); group (m,) index of each segment's cable in ``labels``."""
+    force); group (m,) index of each segment's cable in ``labels``; mass (m,) mass per unit
+    reference length (None: massless)."""
 
     edges: np.ndarray
     length: np.ndarray
@@ -92,6 +106,22 @@ class Cables:
     prestress: np.ndarray
     group: np.ndarray
     labels: tuple[str, ...]
+    mass: np.ndarray | None = None
+
+    @classmethod
+    def of(cls, cables: list[Cable], nodes: np.ndarray) -> Cables:
+        """The segments of the cables defined (``Cable``) on the reference nodes (n_nodes, 3)."""
+        counts = [len(cable.edges) for cable in cables]
+        edges = np.concatenate([cable.edges for cable in cables])
+        return cls(
+            edges,
+            np.linalg.norm(nodes[edges[:, 1]] - nodes[edges[:, 0]], axis=1),
+            np.repeat([cable.EA for cable in cables], counts),
+            np.repeat([cable.prestress for cable in cables], counts),
+            np.repeat(np.arange(len(cables)), counts),
+            tuple(cable.label for cable in cables),
+            np.repeat([cable.mass_per_length for cable in cables], counts),
+        )
 
     @property
     def n_segments(self) -> int:
@@ -127,6 +157,24 @@ class Cables:
             blocks[:, :3, :3] = blocks[:, 3:, 3:] = k
             blocks[:, :3, 3:] = blocks[:, 3:, :3] = -k
         return CableState(forces, energy, axial, taut, blocks)
+
+    def mass_matrix(self, kind: str, n_dofs: int) -> sp.csr_matrix:
+        """The cables' mass matrix (n_dofs, n_dofs), mass units, of the linear two-node
+        segment with m = mass per length x L0: consistent (m / 6) [[2 I, I], [I, 2 I]], or
+        lumped m / 2 I on each node ("consistent" or "lumped", as ``wrinkle.modes``)."""
+        mass = np.zeros(self.n_segments) if self.mass is None else self.mass
+        segment = mass * self.length
+        if kind == "consistent":
+            local = np.kron(np.array([[2.0, 1.0], [1.0, 2.0]]) / 6.0, np.eye(3))
+        elif kind == "lumped":
+            local = np.eye(6) / 2.0
+        else:
+            raise ValueError(f"unknown mass '{kind}'")
+        dofs = (3 * self.edges[:, :, None] + np.arange(3)).reshape(-1, 6)
+        rows = np.repeat(dofs, 6, axis=1).ravel()
+        cols = np.tile(dofs, (1, 6)).ravel()
+        values = (segment[:, None, None] * local).ravel()
+        return sp.coo_matrix((values, (rows, cols)), shape=(n_dofs, n_dofs)).tocsr()
 
     def summary(self, axial: np.ndarray, taut: np.ndarray) -> dict[str, dict[str, float]]:
         """Per cable label: the smallest, largest and mean axial force of its segments

@@ -1,10 +1,10 @@
 """Case files: a membrane analysis described in TOML, read into a ``Case``.
 
 A case has the tables ``[mesh]``, ``[material]`` (or ``[[material]]`` with ``region``),
-``[[support]]``, ``[[load]]``, ``[[probe]]`` and ``[solver]``; docs/case-file.md lists every
-key. Every error names the file, the table and the key at fault (``CaseError``). The ``Case``
-holds the ``Model``, the solver settings, the probes and the units; ``Case.solve()`` and
-``Case.run(out)`` solve it.
+``[[support]]``, ``[[load]]``, ``[[probe]]``, ``[solver]`` and ``[modes]``; docs/case-file.md
+lists every key. Every error names the file, the table and the key at fault (``CaseError``).
+The ``Case`` holds the ``Model``, the solver settings, the probes, the units and the modes
+to compute; ``Case.solve()`` and ``Case.run(out)`` solve it.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from wrinkle.materials import MooneyRivlin, NeoHookean, Ogden, Prestressed, StVe
 from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh, annulus, check_fits, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
+from wrinkle.modes import DEFAULT_MASS, MASS_KINDS, Modes
 from wrinkle.output import ResultsWriteError, ResultWriter
 from wrinkle.refinement import MAX_REFINED_ELEMENTS, refine
 from wrinkle.results import Results, StepResult
@@ -39,6 +40,7 @@ __all__ = [
     "SOLVER_KEYS",
     "Case",
     "CaseError",
+    "ModeSettings",
     "merged",
     "read_case",
     "read_case_data",
@@ -229,6 +231,22 @@ def merged(data: dict, overrides: dict) -> dict:
     return out
 
 
+@dataclass(frozen=True)
+class ModeSettings:
+    """The [modes] table: how many natural modes of the last converged state to compute,
+    with which mass ("consistent" or "lumped", ``wrinkle.modes``) and, where shift (Hz) is
+    given, the modes nearest that frequency instead of the lowest."""
+
+    count: int
+    mass: str = DEFAULT_MASS
+    shift: float | None = None
+
+    def of(self, results: Results) -> Modes:
+        """The modes of the last step of ``results`` (``Results.modes``)."""
+        sigma = None if self.shift is None else (2.0 * math.pi * self.shift) ** 2
+        return results.modes(self.count, mass=self.mass, shift=sigma)
+
+
 @dataclass
 class Case:
     """A case file read: the model and how to solve it and report it.
@@ -239,7 +257,8 @@ class Case:
     title: its ``title``; verification: its [verification] table (read by the verification
     gallery only); coarse: with ``[solver] nested``, the same case on the coarser meshes of
     ``[mesh] levels`` and ``[mesh] refine``, coarsest first (``wrinkle.sequencing``);
-    level_names: what each of them is (a level's file, "[mesh] refine = i"), for messages.
+    level_names: what each of them is (a level's file, "[mesh] refine = i"), for messages;
+    modes: the [modes] table, the natural modes ``run`` computes after the last step.
     """
 
     model: Model
@@ -251,6 +270,7 @@ class Case:
     verification: dict[str, Any] = field(default_factory=dict)
     coarse: list[Model] = field(default_factory=list)
     level_names: list[str] = field(default_factory=list)
+    modes: ModeSettings | None = None
 
     def _label(self, results: Results | None) -> None:
         if results is not None:
@@ -291,7 +311,9 @@ class Case:
         """Solve and write each converged step into the folder ``out`` as it converges
         (``wrinkle.output.ResultWriter``), then the final summary; ``on_step`` is called after
         each step is written. A ConvergenceError or KeyboardInterrupt is raised again after
-        the summary records it; every converged step is on disk."""
+        the summary records it; every converged step is on disk. With [modes], the natural
+        modes of the last step are written too (``ResultWriter.write_modes``); a CaseError
+        if the state has none (unstable), after the summary says so."""
         writer = ResultWriter(
             out, self.model, probes=self.probes, units=self.units, case=self.source
         )
@@ -314,7 +336,14 @@ class Case:
                 writer.finish(False, f"stopped: {error}")
             raise
         end = results.end
-        writer.finish(True, "converged to load factor 1" if end is None else end.message)
+        message = "converged to load factor 1" if end is None else end.message
+        if self.modes is not None:
+            try:
+                writer.write_modes(self.modes.of(results))
+            except ValueError as error:  # an unstable state: the steps stand, say why
+                writer.finish(True, f"{message}; no modes: {error}")
+                raise CaseError(f"{self.source}: [modes]: {error}") from None
+        writer.finish(True, message)
         return results
 
 
@@ -334,7 +363,7 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
         data,
         "top level",
         {"mesh", "material"},
-        {"support", "load", "cable", "probe", "solver", "title", "verification"},
+        {"support", "load", "cable", "probe", "solver", "title", "verification", "modes"},
     )
 
     base, times, units, level_files = _read_mesh(reader, data["mesh"], path.parent)
@@ -400,13 +429,16 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
             except CaseError as error:
                 raise CaseError(f"{error} (on the mesh of [mesh] refine = {level})") from None
             level_names.append(f"[mesh] refine = {level}")
+    modes = _read_modes(reader, data["modes"], model) if "modes" in data else None
     title = data.get("title", "")
     if not isinstance(title, str):
         reader.fail("top level", f"'title' must be a string, got {title!r}")
     verification = data.get("verification", {})
     if not isinstance(verification, dict):
         reader.fail("[verification]", "must be a table")
-    return Case(model, settings, probes, units, path, title, verification, coarse, level_names)
+    return Case(
+        model, settings, probes, units, path, title, verification, coarse, level_names, modes
+    )
 
 
 def _read_model(reader: _Reader, data: dict, mesh: Mesh) -> Model:
@@ -440,16 +472,21 @@ def _read_model(reader: _Reader, data: dict, mesh: Mesh) -> Model:
 
 def _read_cable(reader: _Reader, model: Model, table: dict, where: str) -> None:
     """A [[cable]]: nodes (a selector or a node set, such as a gmsh line physical group),
-    EA, optional prestress (force) and label."""
+    EA, optional prestress (force), mass_per_length (for [modes]) and label."""
     if not isinstance(table, dict):
         reader.fail(where, "must be a table")
-    reader.keys(table, where, {"nodes", "EA"}, {"prestress", "label"})
+    reader.keys(table, where, {"nodes", "EA"}, {"prestress", "label", "mass_per_length"})
     nodes = reader.nodes(model.mesh, table, where)
     EA = reader.number(table, "EA", where, positive=True)
     prestress = reader.number(table, "prestress", where, minimum=0) if "prestress" in table else 0
+    mass = (
+        reader.number(table, "mass_per_length", where, minimum=0)
+        if "mass_per_length" in table
+        else 0
+    )
     label = reader.string(table, "label", where) if "label" in table else str(table["nodes"])
     try:
-        model.add_cables(nodes, float(EA), float(prestress), label)
+        model.add_cables(nodes, float(EA), float(prestress), label, float(mass))
     except ValueError as error:
         reader.fail(where, str(error))
 
@@ -544,7 +581,7 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
         reader.fail(where, "missing key 'model' (one of " + ", ".join(MATERIAL_MODELS) + ")")
     name = reader.choice(table, "model", where, MATERIAL_MODELS)
     parameters = MATERIAL_MODELS[name]
-    optional = {"model", "direction", "angle", "region", "bending", "prestress"} | (
+    optional = {"model", "direction", "angle", "region", "bending", "prestress", "density"} | (
         {"lmbda"} if name == "neo-hookean" else set()
     )
     reader.keys(table, where, {*parameters, "thickness"}, optional)
@@ -595,8 +632,13 @@ def _read_material(reader: _Reader, model: Model, table: dict, where: str) -> No
         if not any(direction):
             reader.fail(where, "'direction' must not be zero")
     angle = math.radians(reader.number(table, "angle", where)) if "angle" in table else None
+    density = (
+        float(reader.number(table, "density", where, positive=True)) if "density" in table else None
+    )
     try:
-        model.assign_material(material, elements, fibre_direction=direction, fibre_angle=angle)
+        model.assign_material(
+            material, elements, fibre_direction=direction, fibre_angle=angle, density=density
+        )
     except ValueError as error:
         reader.fail(where, str(error))
     if "bending" in table:
@@ -711,6 +753,34 @@ def _read_load(reader: _Reader, model: Model, table: dict, where: str) -> None:
         raise
     except ValueError as error:
         reader.fail(where, str(error))
+
+
+def _read_modes(reader: _Reader, table: dict, model: Model) -> ModeSettings:
+    """The [modes] table: count (1 .. the free components), mass, shift (Hz, >= 0)."""
+    where = "[modes]"
+    if not isinstance(table, dict):
+        reader.fail(where, "must be a table")
+    reader.keys(table, where, {"count"}, {"mass", "shift"})
+    count = int(reader.number(table, "count", where, integer=True, minimum=1))
+    free = int(np.count_nonzero(~model.constrained))
+    if count > free:
+        reader.fail(
+            where, f"'count' = {count} is more than the model's {free} free degrees of freedom"
+        )
+    mass = reader.choice(table, "mass", where, MASS_KINDS) if "mass" in table else DEFAULT_MASS
+    shift = float(reader.number(table, "shift", where, minimum=0)) if "shift" in table else None
+    if not np.all(model.density > 0):
+        reader.fail(
+            where,
+            "the natural modes need the mass: give [material] density (mass per unit volume) "
+            "for every material",
+        )
+    if model.gas is not None:
+        reader.fail(
+            where,
+            "a model with a gas load has no modes here (the gas's stiffness is not in the tangent)",
+        )
+    return ModeSettings(count, mass, shift)
 
 
 def _read_solver(reader: _Reader, table: dict) -> SolverSettings:

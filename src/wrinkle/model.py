@@ -16,6 +16,7 @@ Nodes are given as indices, a boolean mask, a node-set name or a selector such a
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -25,7 +26,7 @@ from numpy.typing import ArrayLike
 
 from wrinkle.assembly import DOFS_PER_NODE, SparsityPattern
 from wrinkle.bending import Bending, bending_stiffness, check_flat
-from wrinkle.cables import Cables, cable_edges
+from wrinkle.cables import Cable, Cables, cable_edges
 from wrinkle.gas import Gas
 from wrinkle.kinematics import (
     ReferenceGeometry,
@@ -107,13 +108,15 @@ class Model:
     mesh: ``Mesh``; material: a ``Material`` (wrapped in ``Wrinkling``) or a ``Wrinkling`` for
     all elements (or None, then ``assign_material`` for each region); fibre_direction: (3,) or
     (n_elements, 3) vector projected onto each element as the material axis 1; fibre_angle:
-    radians (scalar or (n_elements,)) turning it about the element normal.
+    radians (scalar or (n_elements,)) turning it about the element normal; density: the
+    material's mass per unit volume, for the natural modes (``wrinkle.modes``).
 
     Attributes: ``constrained`` (n_dofs,) bool and ``prescribed`` (n_dofs,) the supported
     components and their values at load factor 1, ``forces`` (n_dofs,) the dead nodal forces
     at load factor 1, ``supports`` (``Support``), ``pressure`` (n_elements,) the follower
     pressure at load factor 1, ``bending`` (n_elements,) the bending stiffness D of the mean
-    surface (zero: a membrane; ``add_bending``). Change them through the methods, which keep
+    surface (zero: a membrane; ``add_bending``), ``density`` (n_elements,) the mass per unit
+    volume (NaN where not given; ``assign_material``). Change them through the methods, which keep
     the discrete system (``discretise``) up to date.
     """
 
@@ -123,6 +126,7 @@ class Model:
         material: Material | Wrinkling | None = None,
         fibre_direction: ArrayLike = (1.0, 0.0, 0.0),
         fibre_angle: ArrayLike = 0.0,
+        density: float | None = None,
     ):
         self.mesh = mesh
         n = mesh.n_elements
@@ -141,15 +145,15 @@ class Model:
         self.pressure = np.zeros(n)  # follower pressure at full load, per element
         self.gas: Gas | None = None  # a gas load (add_gas): its pressure on the elements above
         self._edge_follower: list[FollowerEdgeLoad] = []
-        # the cables (add_cables): per cable its label, edges (m, 2), EA and prestress force
-        self.cables: list[tuple[str, np.ndarray, float, float]] = []
+        self.cables: list[Cable] = []  # the cables (add_cables)
         self.bending = np.zeros(n)  # bending stiffness D per element (add_bending)
+        self.density = np.full(n, np.nan)  # mass per unit volume per element (assign_material)
         self._bending: Bending | None = None  # kept until the bending stiffness changes
         self._pattern: SparsityPattern | None = None  # the mesh's, kept while it lives
         self._geometry: ReferenceGeometry | None = None  # kept until the materials change
         self._system: DiscreteSystem | None = None  # kept until anything changes
         if material is not None:
-            self.assign_material(material)
+            self.assign_material(material, density=density)
 
     def _changed(self) -> None:
         self._system = None
@@ -182,14 +186,19 @@ class Model:
         elements: ElementSelection = None,
         fibre_direction: ArrayLike | None = None,
         fibre_angle: ArrayLike | None = None,
+        density: float | None = None,
     ) -> None:
         """Give ``elements`` (indices, mask or element-set name; None = all) a material and,
-        optionally, their own fibre direction ((3,) or (k, 3)) and angle (radians).
+        optionally, their own fibre direction ((3,) or (k, 3)) and angle (radians), and the
+        material's density (mass per unit volume, > 0), which the natural modes need
+        (``wrinkle.modes``; None: unknown).
 
         An isotropic material (``is_isotropic``) needs no fibre direction. For an anisotropic
         one the direction is checked here: ValueError naming the first element whose plane it
         is perpendicular to (or if it is zero), and what to set."""
         chosen = self._element_indices(elements)
+        if density is not None and not (math.isfinite(density) and density > 0):
+            raise ValueError(f"density must be finite and > 0, got {density}")
         wrinkling = material if isinstance(material, Wrinkling) else Wrinkling(material)
         direction = self._fibre_direction[chosen]
         if fibre_direction is not None:
@@ -209,6 +218,7 @@ class Model:
             self._fibre_direction[chosen] = direction
         if fibre_angle is not None:
             self._fibre_angle[chosen] = fibre_angle
+        self.density[chosen] = np.nan if density is None else float(density)
         self._geometry = None
         self._changed()
 
@@ -216,6 +226,20 @@ class Model:
     def materials(self) -> list[Wrinkling]:
         """The materials assigned, in order (``assign_material``)."""
         return list(self._materials)
+
+    def mass_per_area(self) -> np.ndarray:
+        """Mass per unit reference area of each element, rho t0 (n_elements,): its
+        material's density times its reference thickness. ValueError naming the first element
+        without a density (``assign_material(density=...)``)."""
+        missing = np.flatnonzero(~(self.density > 0))
+        if missing.size:
+            raise ValueError(
+                f"{missing.size} element(s) have no density, first: element {missing[0]}; give "
+                "the material's density (case file: [material] density; Python: "
+                "assign_material(..., density=...))"
+            )
+        thickness = np.array([m.thickness for m in self._materials])
+        return self.density * thickness[self._material_of_element]
 
     def _reference_geometry(self) -> ReferenceGeometry:
         missing = np.flatnonzero(self._material_of_element < 0)
@@ -321,38 +345,34 @@ class Model:
         EA: float,
         prestress: float = 0.0,
         label: str | None = None,
+        mass_per_length: float = 0.0,
     ) -> None:
         """A tension-only cable along the mesh edges between the selected nodes (a selector,
         a node set such as a gmsh line physical group, indices or a mask), which must form
         one connected path (``wrinkle.cables.cable_edges``): axial stiffness EA > 0 (force),
-        prestress N0 >= 0 (the force at its reference length). label: its name in the
-        summary (default "cable N"). ValueError for bad values or unconnected nodes."""
+        prestress N0 >= 0 (the force at its reference length), mass per unit length >= 0
+        (for the natural modes). label: its name in the summary (default "cable N").
+        ValueError for bad values or unconnected nodes."""
         if not (np.isfinite(EA) and EA > 0):
             raise ValueError(f"cable EA must be finite and > 0, got {EA!r}")
         if not (np.isfinite(prestress) and prestress >= 0):
             raise ValueError(f"cable prestress must be finite and >= 0, got {prestress!r}")
+        if not (np.isfinite(mass_per_length) and mass_per_length >= 0):
+            raise ValueError(
+                f"cable mass_per_length must be finite and >= 0, got {mass_per_length!r}"
+            )
         edges = cable_edges(self.mesh.triangles, self._node_indices(nodes), self.mesh.n_nodes)
         name = label if label is not None else f"cable {len(self.cables) + 1}"
-        if any(existing == name for existing, *_ in self.cables):
+        if any(cable.label == name for cable in self.cables):
             raise ValueError(f"cable label {name!r} is used twice")
-        self.cables.append((name, edges, float(EA), float(prestress)))
+        self.cables.append(Cable(name, edges, float(EA), float(prestress), float(mass_per_length)))
         self._changed()
 
     def _cable_segments(self) -> Cables | None:
         """The segments of every cable (``wrinkle.cables.Cables``), None without cables."""
         if not self.cables:
             return None
-        edges = np.concatenate([edges for _, edges, _, _ in self.cables])
-        counts = [len(edges) for _, edges, _, _ in self.cables]
-        length = np.linalg.norm(self.mesh.nodes[edges[:, 1]] - self.mesh.nodes[edges[:, 0]], axis=1)
-        return Cables(
-            edges,
-            length,
-            np.repeat([ea for _, _, ea, _ in self.cables], counts),
-            np.repeat([n0 for _, _, _, n0 in self.cables], counts),
-            np.repeat(np.arange(len(self.cables)), counts),
-            tuple(name for name, *_ in self.cables),
-        )
+        return Cables.of(self.cables, self.mesh.nodes)
 
     def add_gas(self, gas: Gas, elements: ElementSelection = None) -> None:
         """An enclosed gas (``wrinkle.gas.Gas``) on ``elements`` (None = all): its gauge

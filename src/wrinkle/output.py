@@ -22,6 +22,14 @@
   and "enclosed_volume" where they enclose a volume (``StepResult``)}], "wall_time" (seconds
   since the writer was made), "reference_volume" where the membrane encloses a volume, and
   "units" and "case" if given}.
+- with ``write_modes`` (a case's ``[modes]``): ``mode_01.vtu``, ``mode_02.vtu``, ...: the
+  mesh in the reference configuration with point data ``displacement`` (the state the modes
+  are about) and ``mode`` (the mode shape, scaled to a largest nodal amplitude of 1, length
+  units); ``modes.pvd``, a collection of them with timestep = mode number, which ParaView
+  steps through (apply "Warp By Vector" on ``displacement``, then another on ``mode`` with
+  the amplitude to show as its scale factor); and in the
+  summary ``"frequencies"`` (1/time, Hz in SI units, ascending) and ``"modes"``: {"mass",
+  "shift" (1/time^2), "files", "residuals"} (``wrinkle.modes.Modes``).
 - ``history.csv``: one row per step: step, load_factor, iterations, residual, then pressure
   and enclosed_volume where the summary has them, taut, wrinkled, slack,
   ``<support>_Fx/_Fy/_Fz`` per support, ``<probe>_ux/_uy/_uz`` per probe (mean displacement
@@ -45,7 +53,9 @@ import re
 import secrets
 import time
 from collections.abc import Callable, Mapping
+from functools import partial
 from pathlib import Path
+from types import ModuleType
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -57,6 +67,7 @@ from wrinkle.wrinkling import STATE_NAMES
 
 __all__ = [
     "COLLECTION",
+    "MODE_COLLECTION",
     "HISTORY",
     "STEP_FILE",
     "SUMMARY",
@@ -77,7 +88,9 @@ STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE = (
     "pressure_volume.png",
 )
 COLLECTION = "results.pvd"
+MODE_COLLECTION = "modes.pvd"
 STEP_FILE = re.compile(r"step_\d{4,}\.vtu")
+MODE_FILE = re.compile(r"mode_\d{2,}\.vtu")
 
 
 def step_file_name(index: int) -> str:
@@ -117,6 +130,10 @@ def atomic_write(path: Path, write: Callable[[Path], None]) -> None:
     except BaseException:
         temporary.unlink(missing_ok=True)
         raise
+
+
+def _write_mesh(meshio: ModuleType, mesh, temporary: Path) -> None:
+    meshio.write(temporary, mesh, file_format="vtu")
 
 
 def _write_text(path: Path, text: str) -> None:
@@ -167,6 +184,9 @@ class ResultWriter:
         self.case = str(case) if case is not None else None
         self.steps: list[dict] = []
         self.rows: list[list] = []
+        self.modes: dict | None = None  # the summary's "modes" (write_modes)
+        self._last_displacement = np.zeros(model.n_dofs if hasattr(model, "n_dofs") else 0)
+        self.frequencies: list[float] | None = None
         # the pressure column where the model has pressure loads, the enclosed volume where
         # they enclose one (``DiscreteSystem.volume_closure``)
         self.has_pressure = getattr(model, "pressure_value", None) is not None
@@ -179,8 +199,13 @@ class ResultWriter:
         )
         self.out_dir.mkdir(parents=True, exist_ok=True)
         pictures = {STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE}
+        pictures.add(MODE_COLLECTION)
         for old in self.out_dir.iterdir():
-            if STEP_FILE.fullmatch(old.name) or old.name in pictures:
+            if (
+                STEP_FILE.fullmatch(old.name)
+                or MODE_FILE.fullmatch(old.name)
+                or old.name in pictures
+            ):
                 old.unlink()
         self._write_collection()
         self._write_history()
@@ -194,6 +219,7 @@ class ResultWriter:
         name = step_file_name(index)
         path = self.out_dir / name
         self._write_vtu(path, step)
+        self._last_displacement = np.asarray(step.displacement, dtype=float)
         u = np.asarray(step.displacement, dtype=float).reshape(-1, 3)
         reactions = np.asarray(step.reactions, dtype=float)
         support_forces = support_reactions(self.supports, reactions)
@@ -249,6 +275,46 @@ class ResultWriter:
             self._cables = (id(step), self.system.cable_state(u, tangent=False))
         return self._cables[1]
 
+    def write_modes(self, modes) -> list[Path]:
+        """Write the natural modes (``wrinkle.modes.Modes``) of the last step written:
+        mode_NN.vtu, modes.pvd and, in the summary, their frequencies (module docstring).
+        Returns the paths of the .vtu files."""
+        meshio = require_meshio()
+        mesh = self.model.mesh
+        state = self._last_displacement.reshape(-1, 3)
+        width = max(2, len(str(len(modes))))
+        paths, names = [], []
+        for index in range(len(modes)):
+            shape = np.asarray(modes.shapes[index], dtype=float).reshape(-1, 3)
+            largest = float(np.linalg.norm(shape, axis=1).max(initial=0.0))
+            name = f"mode_{index + 1:0{width}d}.vtu"
+            vtu = meshio.Mesh(
+                mesh.nodes,
+                [("triangle", mesh.triangles)],
+                point_data={
+                    "displacement": state,
+                    "mode": shape / largest if largest > 0 else shape,
+                },
+            )
+            path = self.out_dir / name
+            atomic_write(path, partial(_write_mesh, meshio, vtu))
+            paths.append(path)
+            names.append(name)
+        entries = [
+            f'    <DataSet timestep="{index + 1}" group="" part="0" file={quoteattr(name)}/>'
+            for index, name in enumerate(names)
+        ]
+        self._write_pvd(MODE_COLLECTION, entries)
+        self.frequencies = [float(f) for f in modes.frequencies]
+        self.modes = {
+            "mass": modes.mass,
+            "shift": float(modes.shift),
+            "files": names,
+            "residuals": [float(r) for r in modes.residuals],
+        }
+        self._write_summary(False, "running")
+        return paths
+
     def finish(self, converged: bool, message: str) -> Path:
         """Write the final summary.json (wall time since the writer was made); returns it."""
         return self._write_summary(bool(converged), str(message))
@@ -291,18 +357,27 @@ class ResultWriter:
         atomic_write(path, lambda temporary: meshio.write(temporary, vtu, file_format="vtu"))
 
     def _write_collection(self) -> None:
+        self._write_pvd(
+            COLLECTION,
+            [
+                f'    <DataSet timestep="{s["load_factor"]!r}" group="" part="0" '
+                f"file={quoteattr(s['file'])}/>"
+                for s in self.steps
+            ],
+        )
+
+    def _write_pvd(self, name: str, entries: list[str]) -> None:
+        """A ParaView collection ``name`` of the <DataSet> lines ``entries``."""
         lines = [
             '<?xml version="1.0"?>',
             '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
             "  <Collection>",
+            *entries,
+            "  </Collection>",
+            "</VTKFile>",
+            "",
         ]
-        for s in self.steps:
-            lines.append(
-                f'    <DataSet timestep="{s["load_factor"]!r}" group="" part="0" '
-                f"file={quoteattr(s['file'])}/>"
-            )
-        lines += ["  </Collection>", "</VTKFile>", ""]
-        _write_text(self.out_dir / COLLECTION, "\n".join(lines))
+        _write_text(self.out_dir / name, "\n".join(lines))
 
     def history_header(self) -> list[str]:
         """Column names of history.csv."""
@@ -332,6 +407,9 @@ class ResultWriter:
         }
         if self.reference_volume is not None:
             summary["reference_volume"] = self.reference_volume
+        if self.frequencies is not None:
+            summary["frequencies"] = self.frequencies
+            summary["modes"] = self.modes
         if self.units is not None:
             summary["units"] = self.units
         if self.case is not None:

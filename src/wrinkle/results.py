@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from wrinkle.modes import Modes, natural_modes
 from wrinkle.output import save_results
 from wrinkle.solvers.base import SolverResult
 from wrinkle.solvers.control import PathEnd
@@ -132,6 +133,34 @@ class Results:
     def final(self) -> StepResult:
         """The last converged step."""
         return self.steps[-1]
+
+    def modes(
+        self,
+        count: int,
+        step: int = -1,
+        mass: str = "consistent",
+        shift: float | None = None,
+        linear_solver: str = "auto",
+    ) -> Modes:
+        """The ``count`` lowest natural modes about converged step ``step`` (an index into
+        ``steps``, default the last), with its load and pressure factors and the tangent
+        there (``wrinkle.modes.natural_modes``, which says what ``mass`` and ``shift``
+        mean). The model's materials need a density."""
+        chosen = self.steps[step]
+        value = self.model.pressure_value
+        pressure_factor = (
+            None if value is None or chosen.pressure is None else chosen.pressure / value
+        )
+        return natural_modes(
+            self.model,
+            chosen.displacement,
+            count,
+            load_factor=chosen.load_factor,
+            pressure_factor=pressure_factor,
+            mass=mass,
+            shift=shift,
+            linear_solver=linear_solver,
+        )
 
     def __len__(self) -> int:
         return len(self.steps)

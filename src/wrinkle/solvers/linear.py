@@ -98,12 +98,17 @@ class SuperLU(_FreedWithTheObject):
         Sylvester's law from the pivots of the symmetric factorisation P A P^T = L D L^T
         that diagonal pivoting with one ordering of rows and columns gives); None if A is
         singular or the pivots left the diagonal."""
+        return self.factorise_with_inertia(A)[1]
+
+    def factorise_with_inertia(self, A: sp.csr_matrix) -> tuple[Solve | None, int | None]:
+        """One factorisation of the symmetric A: its solve (None if singular) and its number
+        of negative eigenvalues (``negative_pivots``; None where unknown)."""
         lu = self._lu(A)
         if lu is None:
-            return None
+            return None, None
         if not np.array_equal(lu.perm_r, lu.perm_c):
-            return None
-        return int(np.count_nonzero(lu.U.diagonal() < 0.0))
+            return lu.solve, None
+        return lu.solve, int(np.count_nonzero(lu.U.diagonal() < 0.0))
 
 
 class _PatternCache:
@@ -265,9 +270,15 @@ class Pardiso:
     def negative_pivots(self, A: sp.csr_matrix) -> int | None:
         """The number of negative eigenvalues of the symmetric matrix A: the inertia that
         PARDISO's symmetric indefinite factorisation reports (iparm(23)); None if it fails."""
-        if self.factorise(A, symmetric=True) is None:
-            return None
-        return int(self._solvers[-2].iparm[22])
+        return self.factorise_with_inertia(A)[1]
+
+    def factorise_with_inertia(self, A: sp.csr_matrix) -> tuple[Solve | None, int | None]:
+        """One symmetric indefinite factorisation of A: its solve (None if it fails) and its
+        number of negative eigenvalues (``negative_pivots``)."""
+        solve = self.factorise(A, symmetric=True)
+        if solve is None:
+            return None, None
+        return solve, int(self._solvers[-2].iparm[22])
 
 
 class Cholmod(_FreedWithTheObject):
