@@ -69,6 +69,8 @@ class SparsityPattern:
         )
         self._keys = keys  # (row node, column node) of every block, as row n_nodes + column
         block = np.searchsorted(keys, element_keys).reshape(n, 3, 3)
+        # the block of each element node pair (node_matrix), 4 bytes per entry
+        self._element_blocks = block.reshape(-1).astype(np.int32 if keys.size < 2**31 else np.int64)
         block_row = keys // n_nodes
         block_col = keys % n_nodes
         degree = np.bincount(block_row, minlength=n_nodes)
@@ -177,6 +179,30 @@ class SparsityPattern:
             block[:, None, None],
             component[None, :, None],
             component[None, None, :],
+        )
+
+    def node_matrix(
+        self,
+        element_matrices: np.ndarray,
+        pairs: np.ndarray | None = None,
+        values: np.ndarray | None = None,
+    ) -> sp.csr_matrix:
+        """A scalar matrix on the nodes (n_nodes, n_nodes), CSR on the node-pair blocks of
+        this pattern: the (n, 3, 3) element matrices (entry [e, k, l] at the element's nodes
+        (k, l)) summed, plus ``values`` (m,) at the node pairs ``pairs`` (m, 2), which must be
+        blocks of the pattern (ValueError otherwise)."""
+        positions, weights = self._element_blocks, np.asarray(element_matrices).ravel()
+        if pairs is not None and values is not None:
+            pairs = np.asarray(pairs, dtype=np.int64)
+            keys = pairs[:, 0] * self.n_nodes + pairs[:, 1]
+            extra = np.searchsorted(self._keys, keys)
+            if np.any(self._keys[np.minimum(extra, self._keys.size - 1)] != keys):
+                raise ValueError("a node pair is not in the sparsity pattern")
+            positions = np.concatenate([positions, extra])
+            weights = np.concatenate([weights, np.asarray(values, dtype=float)])
+        data = np.bincount(positions, weights, minlength=self._keys.size)
+        return sp.csr_matrix(
+            (data, self._keys % self.n_nodes, self._block_ptr), shape=(self.n_nodes, self.n_nodes)
         )
 
     def constraint_positions(self, constrained: np.ndarray) -> np.ndarray:

@@ -242,21 +242,42 @@ class Model:
         return self.density * thickness[self._material_of_element]
 
     def _reference_geometry(self) -> ReferenceGeometry:
+        if self._geometry is None:
+            self._geometry = self.geometry_on(self.mesh.nodes)
+        return self._geometry
+
+    def geometry_on(self, nodes: np.ndarray) -> ReferenceGeometry:
+        """The reference geometry (``wrinkle.kinematics``) of the mesh's triangles on the
+        node positions ``nodes`` (n_nodes, 3), with the materials' fibre frames projected
+        onto them. ValueError for an element without a material or of zero area."""
         missing = np.flatnonzero(self._material_of_element < 0)
         if missing.size:
             raise ValueError(
                 f"{missing.size} element(s) have no material, first: element {missing[0]}"
             )
-        if self._geometry is None:
-            isotropic = np.array([m.is_isotropic for m in self._materials], dtype=bool)
-            self._geometry = reference_geometry(
-                self.mesh.nodes,
-                self.mesh.triangles,
-                self._fibre_direction,
-                self._fibre_angle,
-                isotropic=isotropic[self._material_of_element],
-            )
-        return self._geometry
+        isotropic = np.array([m.is_isotropic for m in self._materials], dtype=bool)
+        return reference_geometry(
+            nodes,
+            self.mesh.triangles,
+            self._fibre_direction,
+            self._fibre_angle,
+            isotropic=isotropic[self._material_of_element],
+        )
+
+    def element_prestress(self) -> np.ndarray:
+        """The prestress N0 (n_elements, 2, 2) of each element's material in its material
+        frame, force per unit length (``Prestressed``; zero for a material without one)."""
+        own = np.array(
+            [getattr(m.material, "prestress", np.zeros((2, 2))) for m in self._materials]
+        ).reshape(-1, 2, 2)
+        return own[self._material_of_element]
+
+    def pattern(self) -> SparsityPattern:
+        """The sparsity pattern of the model's stiffness (kept while the mesh and the bending
+        stiffness do not change)."""
+        self.discretise()
+        assert self._pattern is not None
+        return self._pattern
 
     # -- supports and loads -------------------------------------------------------------
     def _add_support(self, nodes: np.ndarray, dofs: np.ndarray, label: str | None) -> None:
