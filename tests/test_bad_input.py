@@ -899,6 +899,63 @@ MORE = [
         replace("thickness = 0.01", 'thickness = 0.01\ndensity = "heavy"'),
         "[material]: 'density' must be a number",
     ),
+    # [formfinding] (issue 21, item 3): the base case's edges x = 0 and x = 1 are free
+    ("formfinding a number", top("formfinding = 3"), "[formfinding]: must be a table"),
+    (
+        "formfinding tolerance 0",
+        append("[formfinding]\ntolerance = 0.0"),
+        "[formfinding]: 'tolerance' must be > 0",
+    ),
+    (
+        "formfinding tolerance 1",
+        append("[formfinding]\ntolerance = 1.0"),
+        "[formfinding]: 'tolerance' must be < 1",
+    ),
+    (
+        "formfinding max_iterations 0",
+        append("[formfinding]\nmax_iterations = 0"),
+        "[formfinding]: 'max_iterations' must be >= 1",
+    ),
+    (
+        "formfinding unknown key",
+        append("[formfinding]\nsteps = 3"),
+        "[formfinding]: unknown key 'steps'",
+    ),
+    (
+        "formfinding without prestress",
+        append("[formfinding]"),
+        "[formfinding]: form finding needs a positive definite prestress on every element",
+    ),
+    (
+        "formfinding free edge",
+        chain(
+            replace("thickness = 0.01", "thickness = 0.01\nprestress = 1.0"),
+            append("[formfinding]"),
+        ),
+        "is neither held nor on a cable",
+    ),
+    (
+        "formfinding cable without prestress",
+        chain(
+            replace("thickness = 0.01", "thickness = 0.01\nprestress = 1.0"),
+            append('[[cable]]\nnodes = "x == 0"\nEA = 1.0\n[[cable]]\nnodes = "x == 1"\nEA = 1.0'),
+            append("[formfinding]"),
+        ),
+        "needs a prestress force on every cable",
+    ),
+    (
+        "formfinding without supports",
+        chain(drop("[[support]]", None), append("[formfinding]")),
+        "[[support]]: at least one support is needed",
+    ),
+    (
+        "formfinding nested",
+        chain(
+            replace("nx = 2, ny = 2}", "nx = 2, ny = 2}\nrefine = 1"),
+            append("[solver]\nnested = true\n[formfinding]"),
+        ),
+        "[formfinding]: a form-finding case is not nested",
+    ),
     # top level
     ("title a number", top("title = 3"), "title"),
     ("verification a number", top("verification = 3"), "[verification]"),

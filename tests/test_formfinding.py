@@ -3,17 +3,22 @@ catenoid's neck radius, the edge cable's arc of radius T / n, the flat sheet tha
 form; the shape does not depend on the elastic stiffness; the outer iterations do not grow
 with the mesh; a model without a form is refused in one line."""
 
+import json
 import math
+from pathlib import Path
 
+import meshio
 import numpy as np
 import pytest
 import scipy.sparse as sp
 from scipy.optimize import brentq
 
 from wrinkle import Model, StVenantKirchhoff, rectangle
+from wrinkle.case import read_case
+from wrinkle.cli import main
 from wrinkle.formfinding import FormFindingError, find_form, form_residual
 from wrinkle.materials import Prestressed
-from wrinkle.mesh import Mesh
+from wrinkle.mesh import Mesh, read_mesh
 
 N = 100.0  # prestress, N/m
 
@@ -202,3 +207,152 @@ def test_form_finding_needs_a_prestress_and_supports():
     loose = Model(rectangle(1.0, 1.0, 4, 4), sheet())
     with pytest.raises(ValueError, match="form finding needs supports"):
         find_form(loose)
+
+
+# -- case files and the command line ---------------------------------------------------------
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+SAIL_CASE = """
+[mesh]
+rectangle = {width = 10.0, height = 10.0, nx = 12, ny = 12}
+[material]
+model = "svk"
+E = 6e8
+nu = 0.3
+thickness = 1e-3
+prestress = 4000.0
+[[support]]
+nodes = "x == 0 and y == 0 or x == 10 and y == 10"
+fix = ["x", "y", "z"]
+[[support]]
+nodes = "x == 10 and y == 0 or x == 0 and y == 10"
+displacement = [0.0, 0.0, 3.0]
+[[cable]]
+nodes = "y == 0"
+EA = 1e7
+prestress = 4e4
+label = "south"
+[[cable]]
+nodes = "y == 10"
+EA = 1e7
+prestress = 4e4
+[[cable]]
+nodes = "x == 0"
+EA = 1e7
+prestress = 4e4
+[[cable]]
+nodes = "x == 10"
+EA = 1e7
+prestress = 4e4
+label = "east"
+[[probe]]
+name = "centre"
+nodes = "x == 5 and y == 5"
+"""
+LOAD = '\n[[load]]\nkind = "pressure"\nvalue = -500.0\n[solver]\nsteps = 4\n'
+
+
+def test_a_formfinding_case_writes_the_form_and_loads_it(tmp_path):
+    """`wrinkle run` with [formfinding]: the last step's points are the found form, which
+    formfound.msh holds too; the summary reports the form finding. A second case on
+    formfound.msh with the same prestress and cables (the two-case workflow) is balanced
+    at zero load (no Newton iteration moves it beyond the form's sliding residual) and
+    gives the one-case run's loaded state."""
+    case = tmp_path / "sail.toml"
+    case.write_text(SAIL_CASE + "[formfinding]\n" + LOAD)
+    assert main(["run", str(case), "--out", str(tmp_path / "one"), "-q"]) == 0
+    summary = json.loads((tmp_path / "one" / "summary.json").read_text())
+    assert summary["formfinding"]["converged"] and summary["formfinding"]["loads"]
+    assert summary["formfinding"]["mesh"] == "formfound.msh"
+    found = read_mesh(tmp_path / "one" / "formfound.msh")
+    last = meshio.read(tmp_path / "one" / summary["steps"][-1]["file"])
+    np.testing.assert_array_equal(last.points, found.nodes)
+    corner = np.flatnonzero(np.isclose(found.nodes[:, 0], 10) & np.isclose(found.nodes[:, 1], 0))
+    assert found.nodes[corner, 2] == pytest.approx(3.0)  # the high point, raised
+    one = np.loadtxt(tmp_path / "one" / "history.csv", delimiter=",", skiprows=1)[-1, -1]
+
+    # the two-case workflow: the found mesh as the reference, the corners held where it has them
+    second = SAIL_CASE.replace(
+        "rectangle = {width = 10.0, height = 10.0, nx = 12, ny = 12}",
+        f'file = "{(tmp_path / "one" / "formfound.msh").as_posix()}"',
+    ).replace("displacement = [0.0, 0.0, 3.0]", 'fix = ["x", "y", "z"]')
+    unloaded = tmp_path / "unloaded.toml"
+    unloaded.write_text(second)
+    at_rest = read_case(unloaded).solve()
+    assert np.abs(at_rest.steps[-1].displacement).max() < 1e-4  # the sliding residual's relaxation
+    loaded = tmp_path / "loaded.toml"
+    loaded.write_text(second + LOAD)
+    assert main(["run", str(loaded), "--out", str(tmp_path / "two"), "-q"]) == 0
+    two = np.loadtxt(tmp_path / "two" / "history.csv", delimiter=",", skiprows=1)[-1, -1]
+    assert one < -0.05  # the centre pulled up and out by the suction... along -z here
+    assert two == pytest.approx(one, rel=1e-6)
+
+
+def test_formfind_command_leaves_the_loads_out(tmp_path):
+    """`wrinkle formfind` on the loaded case: one step at the form, displacement at the
+    level of the sliding residual's relaxation, the summary saying the loads were left out."""
+    case = tmp_path / "sail.toml"
+    case.write_text(SAIL_CASE + LOAD)
+    assert main(["formfind", str(case), "--out", str(tmp_path / "out"), "-q"]) == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["formfinding"]["loads"] is False
+    assert len(summary["steps"]) == 1
+    assert summary["steps"][-1]["max_displacement"] < 1e-4
+    assert (tmp_path / "out" / "formfound.msh").is_file()
+
+
+def test_a_form_that_cannot_be_found_exits_1(tmp_path, capsys):
+    case = tmp_path / "weak.toml"
+    case.write_text(SAIL_CASE.replace("prestress = 4e4", "prestress = 1e3") + "[formfinding]\n")
+    assert main(["run", str(case), "--out", str(tmp_path / "out"), "-q"]) == 1
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and "no form exists" in error[0] and "weak.toml" in error[0]
+
+
+def test_the_sunshield_example_has_ten_positive_frequencies(tmp_path):
+    """examples/sunshield.toml: the flat form, its edge cords at 20 N, and ten natural
+    frequencies, ascending and positive, with small eigen-residuals; the lowest near the
+    first frequency of the held 2 m square's film, 1/2 sqrt(n / rho t) sqrt(2) / 2 = 5.93 Hz
+    (a bound of sorts: the cut-in edges shrink the film, the cords add mass)."""
+    assert main(["run", str(EXAMPLES / "sunshield.toml"), "--out", str(tmp_path), "-q"]) == 0
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    frequencies = np.array(summary["frequencies"])
+    assert frequencies.size == 10 and np.all(np.diff(frequencies) >= 0) and frequencies[0] > 0
+    assert max(summary["modes"]["residuals"]) < 1e-6
+    reference = 0.5 * math.sqrt(10.0 / (1420.0 * 25e-6)) * math.sqrt(2.0) / 2.0
+    assert 0.8 < frequencies[0] / reference < 1.3
+    cords = summary["steps"][-1]["cables"]
+    for cord in cords.values():
+        assert cord["min_force"] == pytest.approx(20.0, rel=1e-3)
+        assert cord["max_force"] == pytest.approx(20.0, rel=1e-3)
+
+
+def test_a_symmetry_plane_holds_an_edge_and_a_plane_of_the_sheet_does_not():
+    """An edge held across (x = 0 with u_x held: a symmetry plane) is a boundary of the
+    form; held only in z, the plane of the flat sheet, it would shrink: refused."""
+    model = Model(rectangle(1.0, 1.0, 4, 4), sheet())
+    model.fix("x == 1 or y == 0 or y == 1")
+    model.fix("x == 0", components="x")
+    assert find_form(model).converged
+    flat = Model(rectangle(1.0, 1.0, 4, 4), sheet())
+    flat.fix("x == 1 or y == 0 or y == 1")
+    flat.fix("x == 0", components="z")
+    with pytest.raises(ValueError, match="neither held nor on a cable"):
+        find_form(flat)
+
+
+def test_pressure_on_a_sail_has_no_potential_and_on_a_held_sheet_has_one():
+    """A follower pressure's work is path-independent (-p V) only on a surface whose
+    boundary cannot sweep volume: on the sail, whose cable edges move, the solvers must not
+    use an energy (``pressure_has_potential`` False, the energy NaN); held all round, they
+    may."""
+    model = sail(4)
+    model.add_pressure(-100.0)
+    system = model.discretise()
+    assert not system.pressure_has_potential
+    assert math.isnan(system.at(1.0).evaluate(np.zeros(model.n_dofs)).energy)
+    held = Model(rectangle(1.0, 1.0, 4, 4), sheet())
+    held.fix("x == 0 or x == 1 or y == 0 or y == 1")
+    held.add_pressure(10.0)
+    assert held.discretise().pressure_has_potential
+    assert math.isfinite(held.discretise().at(1.0).evaluate(np.zeros(held.n_dofs)).energy)

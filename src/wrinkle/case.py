@@ -14,16 +14,33 @@ import math
 import os
 import tomllib
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
 
+from wrinkle.formfinding import (
+    FORM_TOLERANCE,
+    MAX_FORM_ITERATIONS,
+    FormFinding,
+    FormFindingError,
+    find_form,
+)
 from wrinkle.gas import Gas
 from wrinkle.materials import MooneyRivlin, NeoHookean, Ogden, Prestressed, StVenantKirchhoff
 from wrinkle.materials.base import Material
-from wrinkle.mesh import Mesh, annulus, check_fits, cylinder, disk, read_mesh, rectangle, sphere
+from wrinkle.mesh import (
+    Mesh,
+    annulus,
+    check_fits,
+    cylinder,
+    disk,
+    read_mesh,
+    rectangle,
+    sphere,
+    write_mesh,
+)
 from wrinkle.model import Model
 from wrinkle.modes import DEFAULT_MASS, MASS_KINDS, Modes
 from wrinkle.output import ResultsWriteError, ResultWriter
@@ -33,6 +50,8 @@ from wrinkle.selectors import evaluate_expression, select_nodes
 from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS, ConvergenceError, SolverSettings
 from wrinkle.solvers.settings import CONTROLS, CONVERGENCE_TESTS
 
+FORM_MESH = "formfound.msh"  # the found mesh, in the output folder of a [formfinding] case
+
 __all__ = [
     "GENERATORS",
     "LOAD_KINDS",
@@ -40,6 +59,7 @@ __all__ = [
     "SOLVER_KEYS",
     "Case",
     "CaseError",
+    "FormFindingSettings",
     "ModeSettings",
     "merged",
     "read_case",
@@ -102,6 +122,9 @@ class _Reader:
 
     def __init__(self, path: Path):
         self.path = path
+        # the mesh whose coordinates selectors are evaluated on, if not the model's own (the
+        # case's mesh, when the model is rebuilt on its form-found mesh)
+        self.select_on: Mesh | None = None
 
     def fail(self, where: str, message: str) -> NoReturn:
         raise CaseError(f"{self.path}: {where}: {message}")
@@ -186,7 +209,7 @@ class _Reader:
 
     def nodes(self, mesh: Mesh, table: dict, where: str) -> np.ndarray:
         try:
-            return select_nodes(mesh, self.string(table, "nodes", where))
+            return select_nodes(self.select_on or mesh, self.string(table, "nodes", where))
         except (ValueError, TypeError) as error:
             self.fail(where, f"nodes: {error}")
 
@@ -247,6 +270,15 @@ class ModeSettings:
         return results.modes(self.count, mass=self.mass, shift=sigma)
 
 
+@dataclass(frozen=True)
+class FormFindingSettings:
+    """The [formfinding] table: ``find_form``'s tolerance (the largest change of the shape
+    in an iteration, relative to its size) and its most outer iterations."""
+
+    tolerance: float = FORM_TOLERANCE
+    max_iterations: int = MAX_FORM_ITERATIONS
+
+
 @dataclass
 class Case:
     """A case file read: the model and how to solve it and report it.
@@ -258,7 +290,12 @@ class Case:
     gallery only); coarse: with ``[solver] nested``, the same case on the coarser meshes of
     ``[mesh] levels`` and ``[mesh] refine``, coarsest first (``wrinkle.sequencing``);
     level_names: what each of them is (a level's file, "[mesh] refine = i"), for messages;
-    modes: the [modes] table, the natural modes ``run`` computes after the last step.
+    modes: the [modes] table, the natural modes ``run`` computes after the last step;
+    form_finding: the [formfinding] table, with which ``run`` form-finds the model first;
+    rebuild: the case's model made again on another mesh of the same elements (the found
+    form), its loads with it or not, its selectors evaluated on the case's own mesh;
+    selections: each selector text of the case and the nodes it picks on the case's mesh,
+    written into formfound.msh as node sets of those names.
     """
 
     model: Model
@@ -271,6 +308,9 @@ class Case:
     coarse: list[Model] = field(default_factory=list)
     level_names: list[str] = field(default_factory=list)
     modes: ModeSettings | None = None
+    form_finding: FormFindingSettings | None = None
+    rebuild: Callable[[Mesh, bool], Model] | None = None
+    selections: dict[str, np.ndarray] = field(default_factory=dict)
 
     def _label(self, results: Results | None) -> None:
         if results is not None:
@@ -306,6 +346,7 @@ class Case:
         self,
         out: str | os.PathLike,
         on_step: Callable[[StepResult], None] | None = None,
+        loads: bool = True,
         **options: Any,
     ) -> Results:
         """Solve and write each converged step into the folder ``out`` as it converges
@@ -313,10 +354,69 @@ class Case:
         each step is written. A ConvergenceError or KeyboardInterrupt is raised again after
         the summary records it; every converged step is on disk. With [modes], the natural
         modes of the last step are written too (``ResultWriter.write_modes``); a CaseError
-        if the state has none (unstable), after the summary says so."""
+        if the state has none (unstable), after the summary says so.
+
+        With [formfinding] the model is form-found first (``find_form``): the found mesh is
+        written as ``out/formfound.msh`` (with the case's node selections as node sets named
+        by their selector text, so that a case on it selects the same nodes), and the case's
+        model made again on it (``rebuild``: the supports hold the found boundary, the
+        prestress kept) is solved under the case's loads, or without them in one step if
+        ``loads`` is False (``wrinkle formfind``); the summary has "formfinding".
+        FormFindingError if no form is found."""
+        if self.form_finding is None:
+            return self._run(out, on_step, None, **options)
+        form = self.find_form()
+        assert self.rebuild is not None
+        try:
+            model = self.rebuild(form.mesh, loads)
+        except CaseError as error:
+            raise CaseError(f"{error} (on the form-found mesh)") from None
+        analysis = replace(self, model=model, form_finding=None, coarse=[], level_names=[])
+        path = Path(out)
+        path.mkdir(parents=True, exist_ok=True)
+        found = replace(form.mesh, node_sets={**self.selections, **form.mesh.node_sets})
+        write_mesh(found, path / FORM_MESH)
+        summary = {
+            "iterations": form.iterations,
+            "converged": form.converged,
+            "shape_residual": form.residual,
+            "residual": form.sliding[-1],
+            "largest_move": float(np.linalg.norm(form.nodes - self.model.mesh.nodes, axis=1).max()),
+            "mesh": FORM_MESH,
+            "loads": loads,
+        }
+        if not loads:  # the found form alone: one step, at which it balances
+            options = {"steps": 1, "control": "load", **options}
+        return analysis._run(out, on_step, summary, **options)
+
+    def find_form(self) -> FormFinding:
+        """The form of the case's model by its [formfinding] settings (default ones
+        without the table); FormFindingError (naming the case file) if none is found,
+        CaseError for a model that has no form."""
+        settings = self.form_finding or FormFindingSettings()
+        try:
+            return find_form(
+                self.model,
+                tolerance=settings.tolerance,
+                max_iterations=settings.max_iterations,
+                linear_solver=self.settings.linear_solver,
+            )
+        except FormFindingError as error:
+            raise FormFindingError(f"{self.source}: {error}", error.form) from None
+        except ValueError as error:
+            raise CaseError(f"{self.source}: [formfinding]: {error}") from None
+
+    def _run(
+        self,
+        out: str | os.PathLike,
+        on_step: Callable[[StepResult], None] | None,
+        form_finding: dict | None,
+        **options: Any,
+    ) -> Results:
         writer = ResultWriter(
             out, self.model, probes=self.probes, units=self.units, case=self.source
         )
+        writer.form_finding = form_finding
 
         def write(step: StepResult) -> None:
             writer.write_step(step)
@@ -363,7 +463,17 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
         data,
         "top level",
         {"mesh", "material"},
-        {"support", "load", "cable", "probe", "solver", "title", "verification", "modes"},
+        {
+            "support",
+            "load",
+            "cable",
+            "probe",
+            "solver",
+            "title",
+            "verification",
+            "modes",
+            "formfinding",
+        },
     )
 
     base, times, units, level_files = _read_mesh(reader, data["mesh"], path.parent)
@@ -430,6 +540,34 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
                 raise CaseError(f"{error} (on the mesh of [mesh] refine = {level})") from None
             level_names.append(f"[mesh] refine = {level}")
     modes = _read_modes(reader, data["modes"], model) if "modes" in data else None
+    form_finding = None
+    selections: dict[str, np.ndarray] = {}
+    if "formfinding" in data:
+        form_finding = _read_form_finding(reader, data["formfinding"])
+        if coarse:
+            reader.fail(
+                "[formfinding]",
+                "a form-finding case is not nested: set [solver] nested = false, or drop "
+                "[mesh] levels",
+            )
+
+        # the case's node selections, carried into formfound.msh as node sets named by their
+        # selector text: a second case on it finds the same nodes with the same selectors
+        for kind in ("support", "cable", "probe", "load"):
+            for index, table in enumerate(reader.tables(data, kind)):
+                if isinstance(table, dict) and isinstance(table.get("nodes"), str):
+                    text = table["nodes"]
+                    if text not in mesh.node_sets:
+                        selections[text] = reader.nodes(mesh, table, f"[[{kind}]] {index + 1}")
+
+    def rebuild(found: Mesh, loads: bool) -> Model:
+        """The case's model on ``found`` (selectors on the case's mesh), held in place."""
+        again = _Reader(path)
+        again.select_on = mesh
+        rebuilt = _read_model(again, data, found, loads=loads)
+        rebuilt.hold_in_place()
+        return rebuilt
+
     title = data.get("title", "")
     if not isinstance(title, str):
         reader.fail("top level", f"'title' must be a string, got {title!r}")
@@ -437,12 +575,25 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
     if not isinstance(verification, dict):
         reader.fail("[verification]", "must be a table")
     return Case(
-        model, settings, probes, units, path, title, verification, coarse, level_names, modes
+        model,
+        settings,
+        probes,
+        units,
+        path,
+        title,
+        verification,
+        coarse,
+        level_names,
+        modes,
+        form_finding,
+        rebuild,
+        selections,
     )
 
 
-def _read_model(reader: _Reader, data: dict, mesh: Mesh) -> Model:
-    """The model of the case's materials, supports and loads on ``mesh``."""
+def _read_model(reader: _Reader, data: dict, mesh: Mesh, loads: bool = True) -> Model:
+    """The model of the case's materials, supports, cables and (with ``loads``) loads on
+    ``mesh``."""
     model = Model(mesh)
     materials = reader.tables(data, "material", single=True)
     if not materials:
@@ -459,7 +610,7 @@ def _read_model(reader: _Reader, data: dict, mesh: Mesh) -> Model:
         reader.fail("[[support]]", "at least one support is needed")
     for index, table in enumerate(supports):
         _read_support(reader, model, table, f"[[support]] {index + 1}")
-    for index, table in enumerate(reader.tables(data, "load")):
+    for index, table in enumerate(reader.tables(data, "load") if loads else []):
         _read_load(reader, model, table, f"[[load]] {index + 1}")
     for index, table in enumerate(reader.tables(data, "cable")):
         _read_cable(reader, model, table, f"[[cable]] {index + 1}")
@@ -753,6 +904,24 @@ def _read_load(reader: _Reader, model: Model, table: dict, where: str) -> None:
         raise
     except ValueError as error:
         reader.fail(where, str(error))
+
+
+def _read_form_finding(reader: _Reader, table: dict) -> FormFindingSettings:
+    """The [formfinding] table: tolerance (> 0, < 1), max_iterations (>= 1)."""
+    where = "[formfinding]"
+    if not isinstance(table, dict):
+        reader.fail(where, "must be a table")
+    reader.keys(table, where, set(), {"tolerance", "max_iterations"})
+    settings = FormFindingSettings()
+    if "tolerance" in table:
+        tolerance = float(reader.number(table, "tolerance", where, positive=True))
+        if not tolerance < 1:
+            reader.fail(where, f"'tolerance' must be < 1, got {tolerance!r}")
+        settings = replace(settings, tolerance=tolerance)
+    if "max_iterations" in table:
+        count = int(reader.number(table, "max_iterations", where, integer=True, minimum=1))
+        settings = replace(settings, max_iterations=count)
+    return settings
 
 
 def _read_modes(reader: _Reader, table: dict, model: Model) -> ModeSettings:

@@ -1,12 +1,14 @@
-"""Command line: ``wrinkle run CASE [--out DIR] [-q]``, ``wrinkle plot DIR``,
-``wrinkle --version`` (also ``python -m wrinkle ...``).
+"""Command line: ``wrinkle run CASE [--out DIR] [-q]``, ``wrinkle formfind CASE [--out DIR]
+[-q]``, ``wrinkle plot DIR``, ``wrinkle --version`` (also ``python -m wrinkle ...``).
 
 ``run`` solves a TOML case file and writes each converged step into DIR as it converges
-(``wrinkle.case.Case.run``); ``plot`` draws the pictures of such a directory
-(``wrinkle.plot.plot_results``); ``-v`` before the command logs every iteration.
+(``wrinkle.case.Case.run``; with a [formfinding] table it form-finds first); ``formfind``
+form-finds the case (its [formfinding] table, or the defaults) without its loads and writes
+the found form into DIR, with ``formfound.msh``; ``plot`` draws the pictures of such a
+directory (``wrinkle.plot.plot_results``); ``-v`` before the command logs every iteration.
 
-Exit status: 0 done; 1 a load step did not converge, or a results file could not be written
-(every converged step written before is on disk);
+Exit status: 0 done; 1 a load step did not converge, no form was found, or a results file
+could not be written (every converged step written before is on disk);
 2 bad input (a one-line message naming the file, key, node or element, or a missing optional
 dependency); 130 interrupted.
 
@@ -31,17 +33,25 @@ __all__ = ["main"]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from wrinkle.case import read_case
+    from wrinkle.case import FORM_MESH, FormFindingSettings, read_case
+    from wrinkle.formfinding import FormFindingError
     from wrinkle.output import ResultsWriteError
     from wrinkle.progress import Progress
 
     case = read_case(args.case)
+    form_only = args.command == "formfind"
+    if form_only and case.form_finding is None:
+        case.form_finding = FormFindingSettings()
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out {out}: is a file, not a folder for the results")
     progress = Progress(quiet=args.quiet)
     try:
-        case.run(args.out, on_step=progress.step)
+        case.run(args.out, on_step=progress.step, loads=not form_only)
+    except FormFindingError as error:
+        progress.close()
+        print(f"wrinkle: {error}", file=sys.stderr)
+        return 1
     except ConvergenceError as error:
         progress.close()
         print(f"wrinkle: {args.case}: not converged: {error}", file=sys.stderr)
@@ -59,7 +69,8 @@ def _run(args: argparse.Namespace) -> int:
         )
         return 1
     if not args.quiet:
-        print(f"wrote {args.out}/results.pvd, summary.json, history.csv")
+        found = f", {FORM_MESH}" if case.form_finding is not None else ""
+        print(f"wrote {args.out}/results.pvd, summary.json, history.csv{found}")
     return 0
 
 
@@ -90,6 +101,13 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--out", default="results", help="output directory")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     run.set_defaults(run=_run)
+    formfind = sub.add_parser(
+        "formfind", help="form-find a case file's prestressed membrane (without its loads)"
+    )
+    formfind.add_argument("case", help="case file (TOML)")
+    formfind.add_argument("--out", default="results", help="output directory")
+    formfind.add_argument("-q", "--quiet", action="store_true", help="no progress display")
+    formfind.set_defaults(run=_run)
     plot = sub.add_parser("plot", help="pictures of the results in a directory")
     plot.add_argument("directory", help="directory written by wrinkle run")
     plot.set_defaults(run=_plot)

@@ -299,8 +299,10 @@ def _check_not_folded(triangles: np.ndarray, before: np.ndarray, after: np.ndarr
 def check_form_finding(model: Model) -> None:
     """ValueError, in one line, for a model that has no form: no supports; an element whose
     material has no prestress, or a prestress that is not positive definite; a cable
-    without a prestress force; a boundary edge that is neither on a cable nor held (a free
-    edge cannot carry a prestress: it would shrink without end)."""
+    without a prestress force; a boundary edge that is neither on a cable nor held across
+    (all components of both nodes, or one that both hold along which the edge's in-plane
+    normal mostly points, as in a symmetry plane): a free edge cannot carry a prestress,
+    it would shrink without end."""
     if not np.any(model.constrained):
         raise ValueError("form finding needs supports: they give the boundary of the form")
     prestress = model.element_prestress()
@@ -317,18 +319,27 @@ def check_form_finding(model: Model) -> None:
                 f"form finding needs a prestress force on every cable: cable {cable.label!r} "
                 "has none (give [[cable]] prestress)"
             )
-    edges = boundary_edges(model.mesh.triangles)[0][:, :2]
+    triples = boundary_edges(model.mesh.triangles)[0]
+    edges = triples[:, :2]
     if edges.size:
-        on_cable = np.zeros(0, dtype=np.int64)
         n = model.mesh.n_nodes
+        on_cable = np.zeros(0, dtype=np.int64)
         if model.cables:
             cable_edges = np.sort(np.concatenate([c.edges for c in model.cables]), axis=1)
             on_cable = cable_edges[:, 0] * n + cable_edges[:, 1]
         keys = np.sort(edges, axis=1)
         cabled = np.isin(keys[:, 0] * n + keys[:, 1], on_cable)
+        # held across the edge: a component that both nodes hold, along which the edge's
+        # in-plane normal m = e x N mostly points (a symmetry plane); or all components
+        X = model.mesh.nodes[triples]
+        along = X[:, 1] - X[:, 0]
+        normal = np.cross(along, X[:, 2] - X[:, 0])
+        across = np.cross(along, normal)
+        across /= np.linalg.norm(across, axis=1)[:, None]
         held = model.constrained.reshape(-1, 3)
-        shared = np.any(held[edges[:, 0]] & held[edges[:, 1]], axis=1)
-        free = np.flatnonzero(~cabled & ~shared)
+        both = held[edges[:, 0]] & held[edges[:, 1]]
+        secured = np.all(both, axis=1) | np.any(both & (np.abs(across) > 0.5), axis=1)
+        free = np.flatnonzero(~cabled & ~secured)
         if free.size:
             a, b = edges[free[0]]
             raise ValueError(

@@ -18,6 +18,7 @@ import numpy as np
 
 __all__ = [
     "require_meshio",
+    "write_mesh",
     "Mesh",
     "annulus",
     "boundary_nodes",
@@ -775,6 +776,58 @@ def read_mesh(path: str | Path) -> Mesh:
         return _mesh_from_meshio(data, gmsh)
     except ValueError as error:
         raise ValueError(f"mesh file {path}: {error}") from None
+
+
+def write_mesh(mesh: Mesh, path: str | Path) -> Path:
+    """Write ``mesh`` as an ASCII gmsh 2.2 file that ``read_mesh`` reads back to the same
+    mesh: its nodes in order, its triangles in order as one block, each element set as a
+    surface physical group (the triangles' physical tags; so the element sets must not
+    overlap: ValueError otherwise), each other node set as a point physical group (vertex
+    cells), and ``cell_data`` as $ElementData (gmsh views). Returns the path."""
+    meshio = require_meshio()
+    path = Path(path)
+    n = mesh.n_elements
+    physical = np.zeros(n, dtype=np.int64)
+    field_data: dict[str, np.ndarray] = {}
+    tag = 0
+    for name, elements in mesh.element_sets.items():
+        tag += 1
+        if np.any(physical[elements]):
+            raise ValueError(
+                f"element set {name!r} overlaps another: a gmsh file gives each element one "
+                "physical group"
+            )
+        physical[elements] = tag
+        field_data[name] = np.array([tag, 2])
+    vertex_nodes, vertex_tags = [], []
+    for name, nodes in mesh.node_sets.items():
+        if name in mesh.element_sets or nodes.size == 0:
+            continue  # read back as the nodes of the surface group
+        tag += 1
+        vertex_nodes.append(nodes)
+        vertex_tags.append(np.full(nodes.size, tag))
+        field_data[name] = np.array([tag, 0])
+    cells = [("triangle", mesh.triangles)]
+    tags = [physical]
+    if vertex_nodes:
+        cells.append(("vertex", np.concatenate(vertex_nodes)[:, None]))
+        tags.append(np.concatenate(vertex_tags))
+    cell_data: dict[str, list[np.ndarray]] = {
+        "gmsh:physical": tags,
+        "gmsh:geometrical": [np.ones_like(t) for t in tags],
+    }
+    data = meshio.Mesh(mesh.nodes, cells, cell_data=cell_data, field_data=field_data)
+    meshio.write(path, data, file_format="gmsh22", binary=False)
+    # the views by hand: the triangles are elements 1 .. n of the file
+    with path.open("a") as file:
+        for name, values in mesh.cell_data.items():
+            values = np.asarray(values, dtype=float).reshape(n, -1)
+            header = f'$ElementData\n1\n"{name}"\n1\n0.0\n3\n0\n{values.shape[1]}\n{n}\n'
+            file.write(header)
+            rows = np.column_stack([np.arange(1, n + 1), values])
+            np.savetxt(file, rows, fmt=["%d"] + ["%.17g"] * values.shape[1])
+            file.write("$EndElementData\n")
+    return path
 
 
 def meshio_read(path: Path, label: str, file_format: str | None = None):

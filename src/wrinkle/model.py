@@ -298,6 +298,13 @@ class Model:
         self.prescribed[dofs] = 0.0
         self._add_support(chosen, dofs, label)
 
+    def hold_in_place(self) -> None:
+        """Make every prescribed displacement zero: the supports then hold their components
+        where the reference mesh has them (a form-found mesh, whose boundary the prescribed
+        displacements moved into place, ``wrinkle.formfinding``)."""
+        self.prescribed[:] = 0.0
+        self._changed()
+
     def prescribe(
         self, nodes: NodeSelection, displacement: ArrayLike, label: str | None = None
     ) -> None:

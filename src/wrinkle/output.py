@@ -185,6 +185,7 @@ class ResultWriter:
         self.steps: list[dict] = []
         self.rows: list[list] = []
         self.modes: dict | None = None  # the summary's "modes" (write_modes)
+        self.form_finding: dict | None = None  # the summary's "formfinding" (Case.run)
         self._last_displacement = np.zeros(model.n_dofs if hasattr(model, "n_dofs") else 0)
         self.frequencies: list[float] | None = None
         # the pressure column where the model has pressure loads, the enclosed volume where
@@ -407,6 +408,8 @@ class ResultWriter:
         }
         if self.reference_volume is not None:
             summary["reference_volume"] = self.reference_volume
+        if self.form_finding is not None:
+            summary["formfinding"] = self.form_finding
         if self.frequencies is not None:
             summary["frequencies"] = self.frequencies
             summary["modes"] = self.modes

@@ -182,6 +182,7 @@ class DiscreteSystem:
         self.force_round_off = self._force_round_off()
         self._reference_volume: float | None = None  # enclosed by the pressurised elements
         self.cables = cables
+        self._pressure_potential: bool | None = None  # pressure_has_potential, once
         if cables is not None:
             # the data positions of each segment's 6 x 6 tangent block
             positions = np.empty((cables.n_segments, 6, 6), dtype=np.int64)
@@ -541,6 +542,17 @@ class DiscreteSystem:
             )
         return np.where(self.constrained, 0.0, gradient)
 
+    @property
+    def pressure_has_potential(self) -> bool:
+        """Whether the follower pressure has a potential, -p V with V the enclosed volume:
+        when there is none, or its surface is closed (``volume_closure``). On an open
+        surface (a sail whose cable edges move) the work of the pressure depends on the
+        path, and the solvers use the residual as their merit instead."""
+        if self._pressure_potential is None:
+            closure = self.volume_closure()
+            self._pressure_potential = closure is None or self._pressurised() is None
+        return self._pressure_potential
+
     def volume_closure(self) -> str | None:
         """Why the pressurised elements do not enclose a volume that ``enclosed_volume``
         measures, or None if they do: none are pressurised, or a boundary edge is neither
@@ -777,8 +789,8 @@ class StepProblem:
                 )
             external = external + follower
             energy -= self.pressure_factor * system.pressure_work(u, x_elements=x)
-            if system.loading.follower_edges:
-                energy = np.nan  # follower edge loads have no potential
+            if system.loading.follower_edges or not system.pressure_has_potential:
+                energy = np.nan  # follower edge loads, an open pressurised surface: none
         residual = np.where(self.free, external - internal, 0.0)
         reactions = np.where(self.free, 0.0, internal - external)
         if self.motion_force is None:
