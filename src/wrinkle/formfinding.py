@@ -40,6 +40,7 @@ Newton iterations take up the sliding part with the elastic stiffness.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
@@ -63,6 +64,8 @@ __all__ = [
     "find_form",
     "form_residual",
 ]
+
+logger = logging.getLogger(__name__)
 
 FORM_TOLERANCE = 1e-6  # the largest change of the shape in an iteration, relative to its size
 MAX_FORM_ITERATIONS = 200
@@ -266,6 +269,13 @@ def find_form(
         form.sliding.append(sliding)
         form.moves.append(move)
         form.iterations = iteration
+        logger.info(
+            "form finding iteration %3d: shape moved %.3e, shape residual %.3e, residual %.3e",
+            iteration,
+            move,
+            residual,
+            sliding,
+        )
         if on_iteration is not None:
             on_iteration(iteration, residual)
         if not np.all(np.isfinite(x)):
