@@ -433,3 +433,19 @@ def test_modes_carry_the_cable_mass():
     bound = phi0 @ K @ phi0 / (phi0 @ M @ phi0)
     assert heavy.eigenvalues[0] <= bound * (1 + 1e-9)
     assert heavy.frequencies[0] < 0.8 * plain.frequencies[0]
+
+
+def test_modes_of_a_state_past_the_limit_point_exit_1(tmp_path, capsys):
+    """The balloon example past its maximum pressure (volume control): under its pressure
+    that state is unstable (the tangent with the follower pressure's stiffness has a negative
+    eigenvalue, the reason the pressure falls), so it has no vibration about it. The run
+    writes its steps and a summary saying so, and ends with one line and exit status 1."""
+    text = (EXAMPLES / "balloon.toml").read_text()
+    text = text.replace("[material]\n", "[material]\ndensity = 1000.0\n", 1)
+    case = tmp_path / "balloon.toml"
+    case.write_text(text + "\n[modes]\ncount = 3\n")
+    assert main(["run", str(case), "--out", str(tmp_path / "out"), "-q"]) == 1
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and "[modes]" in error[0] and "unstable" in error[0]
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert "no modes" in summary["message"] and "frequencies" not in summary

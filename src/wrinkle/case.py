@@ -61,6 +61,7 @@ __all__ = [
     "CaseError",
     "FormFindingSettings",
     "ModeSettings",
+    "NoModesError",
     "merged",
     "read_case",
     "read_case_data",
@@ -254,6 +255,11 @@ def merged(data: dict, overrides: dict) -> dict:
     return out
 
 
+class NoModesError(RuntimeError):
+    """The last converged state has no natural modes (it is unstable, or its tangent has a
+    complex eigenvalue): the steps stand, the run cannot answer [modes] (exit status 1)."""
+
+
 @dataclass(frozen=True)
 class ModeSettings:
     """The [modes] table: how many natural modes of the last converged state to compute,
@@ -353,7 +359,7 @@ class Case:
         (``wrinkle.output.ResultWriter``), then the final summary; ``on_step`` is called after
         each step is written. A ConvergenceError or KeyboardInterrupt is raised again after
         the summary records it; every converged step is on disk. With [modes], the natural
-        modes of the last step are written too (``ResultWriter.write_modes``); a CaseError
+        modes of the last step are written too (``ResultWriter.write_modes``); NoModesError
         if the state has none (unstable), after the summary says so.
 
         With [formfinding] the model is form-found first (``find_form``): the found mesh is
@@ -442,7 +448,7 @@ class Case:
                 writer.write_modes(self.modes.of(results))
             except ValueError as error:  # an unstable state: the steps stand, say why
                 writer.finish(True, f"{message}; no modes: {error}")
-                raise CaseError(f"{self.source}: [modes]: {error}") from None
+                raise NoModesError(f"{self.source}: [modes]: {error}") from None
         writer.finish(True, message)
         return results
 

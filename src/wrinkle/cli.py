@@ -7,10 +7,10 @@ form-finds the case (its [formfinding] table, or the defaults) without its loads
 the found form into DIR, with ``formfound.msh``; ``plot`` draws the pictures of such a
 directory (``wrinkle.plot.plot_results``); ``-v`` before the command logs every iteration.
 
-Exit status: 0 done; 1 a load step did not converge, no form was found, or a results file
-could not be written (every converged step written before is on disk);
-2 bad input (a one-line message naming the file, key, node or element, or a missing optional
-dependency); 130 interrupted.
+Exit status: 0 done; 1 a load step did not converge, no form was found, the last state has
+no natural modes ([modes] on an unstable state), or a results file could not be written
+(every converged step written before is on disk); 2 bad input (a one-line message naming
+the file, key, node or element, or a missing optional dependency); 130 interrupted.
 
 The paper's test and the verification gallery are not commands of the installed program: they
 live in the repository (``python examples/paper_test.py``, ``python -m verification``).
@@ -33,7 +33,7 @@ __all__ = ["main"]
 
 
 def _run(args: argparse.Namespace) -> int:
-    from wrinkle.case import FORM_MESH, FormFindingSettings, read_case
+    from wrinkle.case import FORM_MESH, FormFindingSettings, NoModesError, read_case
     from wrinkle.formfinding import FormFindingError
     from wrinkle.output import ResultsWriteError
     from wrinkle.progress import Progress
@@ -48,7 +48,7 @@ def _run(args: argparse.Namespace) -> int:
     progress = Progress(quiet=args.quiet)
     try:
         case.run(args.out, on_step=progress.step, loads=not form_only)
-    except FormFindingError as error:
+    except (FormFindingError, NoModesError) as error:
         progress.close()
         print(f"wrinkle: {error}", file=sys.stderr)
         return 1
