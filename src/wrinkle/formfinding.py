@@ -47,6 +47,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import depth_first_order
 
 from wrinkle.kinematics import reference_normals
 from wrinkle.loads import boundary_edges
@@ -183,23 +184,23 @@ def _cable_tangents(model: Model, nodes: np.ndarray) -> np.ndarray:
 
 def _oriented(edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The segments of one cable path as (start, end) node arrays, each segment turned to
-    run the same way along the path (the edges come sorted by node, not along it)."""
-    edges = np.asarray(edges)
-    neighbours: dict[int, list[int]] = {}
-    for a, b in edges.tolist():
-        neighbours.setdefault(a, []).append(b)
-        neighbours.setdefault(b, []).append(a)
-    ends = [node for node, near in neighbours.items() if len(near) == 1]
-    start = ends[0] if ends else int(edges[0, 0])
-    order = [start]
-    previous = -1
-    while len(order) <= len(edges):
-        options = [n for n in neighbours[order[-1]] if n != previous]
-        if not options or (not ends and options[0] == start):
-            break
-        previous = order[-1]
-        order.append(options[0])
-    path = np.array(order)
+    run the same way along the path (the edges come sorted by node, not along it): the
+    depth-first order of the path's graph from one of its ends (any node of a loop)."""
+    edges = np.asarray(edges, dtype=np.int64)
+    nodes, local = np.unique(edges, return_inverse=True)
+    local = local.reshape(edges.shape)
+    graph = sp.coo_matrix(
+        (np.ones(len(edges)), (local[:, 0], local[:, 1])), shape=(nodes.size, nodes.size)
+    )
+    degree = np.bincount(local.ravel(), minlength=nodes.size)
+    if degree.max() > 2:  # a branched cable: as given (a node whose two segments disagree
+        return edges[:, 0], edges[:, 1]  # gets no tangent, and all its force counts)
+    ends = np.flatnonzero(degree == 1)
+    start = int(ends[0]) if ends.size else 0
+    order = depth_first_order(graph, start, directed=False, return_predecessors=False)
+    path = nodes[order]
+    if not ends.size:  # a loop: back to the start
+        path = np.append(path, path[0])
     return path[:-1], path[1:]
 
 
