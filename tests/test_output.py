@@ -100,15 +100,48 @@ def test_vtu_fields_hold_the_solution(solved, written):
             "tension_direction": (m, 3),
             "wrinkle_direction": (m, 3),
             "principal_stress": (m, 2),
+            "principal_stress_major": (m,),
+            "principal_stress_minor": (m,),
+            "stress": (m, 9),
+            "strain": (m, 9),
+            "fibre_direction": (m, 3),
             "wrinkling_strain": (m,),
             "thickness": (m,),
         }
         assert np.issubdtype(cell["state"].dtype, np.integer)
         report = element_report(model, step.displacement)
         np.testing.assert_array_equal(cell["state"], report.state)
-        for name in shapes:
-            if name != "state":
-                np.testing.assert_allclose(cell[name], getattr(report, name), rtol=1e-15)
+        for name in ("tension_direction", "wrinkle_direction", "principal_stress", "thickness"):
+            np.testing.assert_allclose(cell[name], getattr(report, name), rtol=1e-15)
+        np.testing.assert_array_equal(cell["principal_stress_major"], report.principal_stress[:, 1])
+        np.testing.assert_array_equal(cell["principal_stress_minor"], report.principal_stress[:, 0])
+        # the stress tensor: symmetric, in the current plane (no normal part), its in-plane
+        # eigenvalues the principal stresses (two of the three; the third, along the
+        # normal, zero)
+        sigma = cell["stress"].reshape(m, 3, 3)
+        np.testing.assert_allclose(sigma, sigma.transpose(0, 2, 1), atol=1e-14)
+        values = np.linalg.eigvalsh(sigma)
+        expected = np.sort(np.column_stack([report.principal_stress, np.zeros(m)]), axis=1)
+        scale = np.abs(report.principal_stress).max()
+        np.testing.assert_allclose(values, expected, atol=1e-10 * scale)
+        # the strain: (C - I)/2 pulled back; its trace is (tr C - 2)/2 = (|F|^2 - 2)/2
+        E = cell["strain"].reshape(m, 3, 3)
+        x = mesh.nodes + u
+        system = model.discretise()
+        G = system.geometry.shape_gradient
+        F = np.einsum("nki,nka->nia", x[mesh.triangles], G)
+        np.testing.assert_allclose(
+            np.trace(E, axis1=1, axis2=2), (np.sum(F**2, axis=(1, 2)) - 2) / 2, atol=1e-12
+        )
+        np.testing.assert_allclose(cell["fibre_direction"], np.tile([1.0, 0, 0], (m, 1)))
+        # the nodal stress: an area-weighted mean of the elements' at the node
+        nodal = vtu.point_data["stress_nodal"].reshape(-1, 3, 3)
+        corner = 0  # one element (or two) at the corner: a weighted mean of theirs
+        at_corner = np.flatnonzero(np.any(mesh.triangles == corner, axis=1))
+        area = report.area[at_corner]
+        np.testing.assert_allclose(
+            nodal[corner], np.einsum("n,nij->ij", area, sigma[at_corner]) / area.sum(), rtol=1e-12
+        )
         counts = tuple(int(np.count_nonzero(cell["state"] == k)) for k in range(3))
         assert counts == tuple(step.states)
         # the wrinkling conditions: uniaxial tension along a unit tension direction,
@@ -359,3 +392,38 @@ def test_without_meshio_the_message_says_what_to_install(solved, tmp_path, monke
     ):
         writer.write_step(results.steps[0])
     assert {p.name for p in tmp_path.iterdir()} == WRITTEN
+
+
+def test_stress_of_a_taut_sheet_is_the_closed_form(tmp_path):
+    """An equibiaxial stretch lambda of a St Venant-Kirchhoff sheet: the Cauchy stress
+    resultant is N (e_x e_x + e_y e_y) with N = E t / (1 - nu) (lambda^2 - 1) / 2 (Green
+    strain (lambda^2 - 1)/2 each way, S = E t / (1 - nu) times it per reference length, and
+    sigma = F S F^T / J = lambda^2 S / lambda^2), at every element and node."""
+    E, nu, t, stretch = 1000.0, 0.3, 0.01, 1.05
+    mesh = wrinkle.rectangle(1.0, 1.0, 3, 3)
+    model = wrinkle.Model(mesh, StVenantKirchhoff.isotropic(E=E, nu=nu, thickness=t))
+    edge = np.flatnonzero(wrinkle.mesh.boundary_nodes(mesh))
+    model.prescribe(
+        edge, np.column_stack([(stretch - 1) * mesh.nodes[edge, :2], np.zeros(edge.size)])
+    )
+    results = model.solve(steps=1, tolerance=1e-11)
+    writer = ResultWriter(tmp_path, model)
+    writer.write_step(results.final)
+    vtu = meshio.read(tmp_path / "step_0001.vtu")
+    N = E * t / (1 - nu) * (stretch**2 - 1) / 2
+    expected = np.diag([N, N, 0.0]).ravel()
+    np.testing.assert_allclose(
+        vtu.cell_data_dict["stress"]["triangle"], np.tile(expected, (18, 1)), atol=1e-9 * N
+    )
+    np.testing.assert_allclose(
+        vtu.point_data["stress_nodal"], np.tile(expected, (16, 1)), atol=1e-9 * N
+    )
+    np.testing.assert_allclose(
+        vtu.cell_data_dict["principal_stress_major"]["triangle"], N, rtol=1e-9
+    )
+    strain = (stretch**2 - 1) / 2
+    np.testing.assert_allclose(
+        vtu.cell_data_dict["strain"]["triangle"],
+        np.tile(np.diag([strain, strain, 0]).ravel(), (18, 1)),
+        atol=1e-12,
+    )

@@ -8,10 +8,15 @@
   supports), and cell data ``state`` (0 taut, 1 wrinkled, 2 slack), ``tension_direction`` and
   ``wrinkle_direction`` (unit 3-vectors in the deformed configuration, zero where not defined),
   ``principal_stress`` (minor, major Cauchy stress resultant, force per unit current length),
-  ``wrinkling_strain`` (beta) and ``thickness`` (current). In ParaView, open ``results.pvd``
-  and apply the "Warp By Vector" filter with the vectors ``displacement`` (scale factor 1)
-  to see the deformed membrane; colour by ``state`` and add "Glyph" on ``tension_direction``
-  for the tension field.
+  the same as the scalars ``principal_stress_major`` and ``principal_stress_minor``,
+  ``stress`` (the Cauchy stress resultant tensor in global axes, 9 components, force per
+  current length), ``strain`` (the Green-Lagrange strain in global reference axes, 9
+  components), ``fibre_direction`` (the material axis 1 in the reference),
+  ``wrinkling_strain`` (beta) and ``thickness`` (current); point data ``stress_nodal``, the
+  current-area-weighted average of ``stress`` over the elements at each node. In ParaView,
+  open ``results.pvd`` and apply the "Warp By Vector" filter with the vectors
+  ``displacement`` (scale factor 1) to see the deformed membrane; colour by ``state`` and
+  add "Glyph" on ``tension_direction`` for the tension field.
 - ``results.pvd``: a ParaView collection of the converged steps, timestep = load factor.
 - ``summary.json``: {"converged", "message", "steps": [{"step", "file", "load_factor",
   "iterations", "residual", "states": {"taut", "wrinkled", "slack"}, "reactions":
@@ -62,7 +67,7 @@ import numpy as np
 
 from wrinkle.cables import CableState
 from wrinkle.mesh import require_meshio
-from wrinkle.post import element_report, support_reactions
+from wrinkle.post import element_report, nodal_average, support_reactions
 from wrinkle.wrinkling import STATE_NAMES
 
 __all__ = [
@@ -330,6 +335,11 @@ class ResultWriter:
             "tension_direction": report.tension_direction,
             "wrinkle_direction": report.wrinkle_direction,
             "principal_stress": report.principal_stress,
+            "principal_stress_major": report.principal_stress[:, 1].copy(),
+            "principal_stress_minor": report.principal_stress[:, 0].copy(),
+            "stress": report.cauchy_stress.reshape(-1, 9),
+            "strain": report.strain.reshape(-1, 9),
+            "fibre_direction": report.fibre_direction,
             "wrinkling_strain": report.wrinkling_strain,
             "thickness": report.thickness,
         }
@@ -352,6 +362,9 @@ class ResultWriter:
             point_data={
                 "displacement": np.asarray(step.displacement, dtype=float).reshape(-1, 3),
                 "reaction": np.asarray(step.reactions, dtype=float).reshape(-1, 3),
+                "stress_nodal": nodal_average(
+                    mesh.triangles, report.cauchy_stress, report.area
+                ).reshape(-1, 9),
             },
             cell_data=blocks,
         )

@@ -41,6 +41,7 @@ __all__ = [
     "PointResponse",
     "element_report",
     "material_response",
+    "nodal_average",
     "plane_quantities",
     "support_reactions",
 ]
@@ -108,7 +109,13 @@ class ElementReport:
     per unit current length; thickness: (n,); wrinkling_strain: (n,) beta;
     tension_direction, wrinkle_direction: (n, 3) unit vectors in the current configuration
     (zero where not defined); reference_tension_direction, reference_wrinkle_direction: (n, 3)
-    the same in the reference configuration.
+    the same in the reference configuration; cauchy_stress: (n, 3, 3) the Cauchy stress
+    resultant in global axes, force per unit current length, sigma = F N F^T / J (J = sqrt
+    det C, the area ratio) where taut, s t (x) t along the current tension direction t where
+    wrinkled (the tension field's uniaxial stress; F would add the wrinkles' lost length),
+    zero where slack: its eigenvalues in the plane are ``principal_stress``; strain: (n, 3, 3)
+    the Green-Lagrange strain (C - I) / 2 in global reference axes, A^T E A; fibre_direction:
+    (n, 3) the material axis 1 in the reference; area: (n,) current area.
     """
 
     state: np.ndarray
@@ -120,6 +127,29 @@ class ElementReport:
     wrinkle_direction: np.ndarray
     reference_tension_direction: np.ndarray
     reference_wrinkle_direction: np.ndarray
+    cauchy_stress: np.ndarray
+    strain: np.ndarray
+    fibre_direction: np.ndarray
+    area: np.ndarray
+
+
+def nodal_average(triangles: np.ndarray, values: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Weighted average at each node of per-element values (n, ...) over the elements that
+    share it, weights (n,) (e.g. areas): (n_nodes, ...); zero at a node no element uses."""
+    n_nodes = int(triangles.max()) + 1
+    flat = np.asarray(values, dtype=float).reshape(len(values), -1)
+    nodes = triangles.ravel()
+    weight = np.repeat(np.asarray(weights, dtype=float), 3)
+    total = np.bincount(nodes, weight, minlength=n_nodes)
+    sums = np.stack(
+        [
+            np.bincount(nodes, weight * np.repeat(flat[:, k], 3), minlength=n_nodes)
+            for k in range(flat.shape[1])
+        ],
+        axis=1,
+    )
+    average = sums / np.where(total > 0, total, 1.0)[:, None]
+    return average.reshape(n_nodes, *np.shape(values)[1:])
 
 
 def _unit(vectors: np.ndarray) -> np.ndarray:
@@ -141,6 +171,15 @@ def element_report(model: Model, u: np.ndarray) -> ElementReport:
     wrinkle_plane = np.einsum("nab,nb->na", _inverse2(C), q.wrinkle_direction)
     wrinkle = _unit(np.einsum("nia,na->ni", F, wrinkle_plane))
     r = result.response
+    area_ratio = np.sqrt(np.maximum(C[:, 0, 0] * C[:, 1, 1] - C[:, 0, 1] ** 2, 0.0))
+    taut_stress = (
+        np.einsum("nia,nab,njb->nij", F, r.stress, F)
+        / np.where(area_ratio > 0, area_ratio, 1.0)[:, None, None]
+    )
+    field = q.principal_stress[:, 1, None, None] * tension[:, :, None] * tension[:, None, :]
+    cauchy = np.where((r.state == TAUT)[:, None, None], taut_stress, field)
+    cauchy[r.state == SLACK] = 0.0
+    strain = np.einsum("nai,nab,nbj->nij", frame, 0.5 * (C - np.eye(2)), frame)
     return ElementReport(
         r.state,
         r.stress,
@@ -151,6 +190,10 @@ def element_report(model: Model, u: np.ndarray) -> ElementReport:
         wrinkle,
         reference_tension,
         reference_wrinkle,
+        cauchy,
+        strain,
+        frame[:, 0].copy(),
+        system.geometry.area * area_ratio,
     )
 
 
