@@ -380,7 +380,7 @@ BAD_ANNULUS = (
     "annulus = {inner_radius = 2.0, outer_radius = 1.0, n_radial = 2, n_circumferential = 8}"
 )
 BAD_CYLINDER = (
-    "cylinder = {radius = 1.0, length = 2.0, n_circumferential = 8, n_axial = 2, n_cap = 0}"
+    "cylinder = {radius = 1.0, length = 2.0, n_circumferential = 8, n_axial = 2, n_cap = -1}"
 )
 MOONEY = 'model = "mooney-rivlin"\nC10 = 100.0\nC01 = 10.0\nthickness = 0.01'
 OGDEN = 'model = "ogden"\nmu = [300.0, -20.0]\nalpha = [2.0, -2.0]\nthickness = 0.01'
@@ -425,7 +425,7 @@ MORE = [
     ),
     ("sphere n 0", replace(R, "sphere = {radius = 1.0, n = 0}"), "'n' must be > 0"),
     (
-        "cylinder n_cap 0",
+        "cylinder n_cap -1",
         replace(
             R,
             BAD_CYLINDER,

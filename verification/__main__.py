@@ -22,9 +22,12 @@ from verification.benchmarks import (
     airbag,
     annulus_hub,
     balloon,
+    cable_arc,
+    catenoid,
     inflated_cylinder,
     lame_annulus,
     membrane_beam,
+    membrane_frequencies,
     prestressed_square,
     shear_stretch,
     simple_shear,
@@ -48,6 +51,9 @@ MODULES = (
     sphere,
     balloon,
     prestressed_square,
+    catenoid,
+    cable_arc,
+    membrane_frequencies,
 )
 
 

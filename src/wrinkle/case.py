@@ -721,7 +721,14 @@ def _read_mesh(reader: _Reader, table: dict, folder: Path) -> tuple[Mesh, int, d
             )
         reader.keys(parameters, sub, set(keys), set())
         values = [
-            reader.number(parameters, key, sub, positive=True, integer=key.startswith("n"))
+            reader.number(
+                parameters,
+                key,
+                sub,
+                positive=key != "n_cap",
+                integer=key.startswith("n"),
+                minimum=0 if key == "n_cap" else None,
+            )
             for key in keys
         ]
         return generator(*values), times, units, level_files

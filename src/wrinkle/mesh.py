@@ -413,8 +413,9 @@ def cylinder(
     out of the tube), so a positive follower pressure inflates it.
 
     Node sets: "root" and "tip" (the wall's end circles), "root_cap" and "tip_cap" (all nodes
-    of a cap, its circle included). Element sets: "wall", "root_cap", "tip_cap". The surface
-    is closed (every edge is shared by exactly two triangles) and encloses the prism on the
+    of a cap, its circle included). Element sets: "wall", "root_cap", "tip_cap". With
+    n_cap = 0 the tube is open (the wall alone, no caps or their sets: a tube between two
+    rings, such as a catenoid's start). With caps the surface is closed (every edge is shared by exactly two triangles) and encloses the prism on the
     inscribed polygon, volume n_circumferential / 2 sin(2 pi / n_circumferential)
     radius**2 length, which tends to pi radius**2 length with an error of order
     (1 / n_circumferential)**2.
@@ -423,7 +424,7 @@ def cylinder(
     length = _check_length("cylinder", "length", length)
     n_circumferential = _check_count("cylinder", "n_circumferential", n_circumferential, 3)
     n_axial = _check_count("cylinder", "n_axial", n_axial, 1)
-    n_cap = _check_count("cylinder", "n_cap", n_cap, 1)
+    n_cap = _check_count("cylinder", "n_cap", n_cap, 0)
     check_fits(2 * n_circumferential * (n_axial + 2 * n_cap), "cylinder: the wall and the end caps")
     n = n_circumferential
     # the wall: an annulus's connectivity with its circles placed along x (the annulus's
@@ -440,6 +441,9 @@ def cylinder(
         ]
     )
     n_wall = wall_nodes.shape[0]
+    if n_cap == 0:  # an open tube
+        ends = {"root": np.arange(n), "tip": n_axial * n + np.arange(n)}
+        return Mesh(wall_nodes, wall, ends, {"wall": np.arange(wall.shape[0])})
     # a cap: a disk in the (y, z) plane, local node 0 its centre, 1 + (k - 1) n + j on circle k;
     # counter-clockwise seen from +x (y x z = x), i.e. from outside at the tip
     ring_nodes, ring_triangles = _polar_rings(radius * np.arange(1, n_cap + 1) / n_cap, n)

@@ -121,7 +121,7 @@ def test_case_overrides_and_verification_table(tmp_path):
 
 def test_every_benchmark_has_a_case_file():
     names = [b.name for b in gallery.benchmarks()]
-    assert len(names) == len(set(names)) == 10
+    assert len(names) == len(set(names)) == 13
     for name in names:
         assert (CASES / f"{name}.toml").is_file(), name
 
@@ -135,7 +135,7 @@ def test_quick_gallery_passes(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert status == 0, printed
     report = (out / "report.md").read_text()
-    assert "10 of 10 benchmarks pass" in report
+    assert "13 of 13 benchmarks pass" in report
     for line in report.splitlines():
         assert "FAIL" not in line, line
     for link in report.split("](")[1:]:

@@ -16,7 +16,7 @@ from scipy.optimize import brentq
 from verification.references.inflated_cylinder import InflatedTube, moment_ratio, taut_half_angle
 from wrinkle.case import read_case
 from wrinkle.loads import pressure_volume
-from wrinkle.mesh import cylinder
+from wrinkle.mesh import boundary_nodes, cylinder
 
 CASE = Path(__file__).resolve().parents[2] / "verification" / "cases" / "inflated_cylinder.toml"
 
@@ -107,12 +107,26 @@ def test_cylinder_numbering_and_node_sets():
         ((1.0, -1.0, 8, 2, 2), "length must be a finite number > 0"),
         ((1.0, 1.0, 2, 2, 2), "n_circumferential must be an integer >= 3"),
         ((1.0, 1.0, 8, 0, 2), "n_axial must be an integer >= 1"),
-        ((1.0, 1.0, 8, 2, 1.5), "n_cap must be an integer >= 1"),
+        ((1.0, 1.0, 8, 2, 1.5), "n_cap must be an integer >= 0"),
+        ((1.0, 1.0, 8, 2, -1), "n_cap must be an integer >= 0"),
     ],
 )
 def test_cylinder_rejects_bad_input(args, message):
     with pytest.raises(ValueError, match=message):
         cylinder(*args)
+
+
+def test_open_cylinder_is_the_wall_alone_with_two_free_end_circles():
+    """n_cap = 0: the tube without its caps; every edge but those of the two end circles is
+    shared by two triangles, and the boundary is the root and tip circles."""
+    tube = cylinder(1.0, 2.0, 12, 4, 0)
+    assert tube.n_nodes == 12 * 5 and tube.n_elements == 2 * 12 * 4
+    assert set(tube.node_sets) == {"root", "tip"} and set(tube.element_sets) == {"wall"}
+    np.testing.assert_array_equal(
+        np.flatnonzero(boundary_nodes(tube)),
+        np.concatenate([tube.node_sets["root"], tube.node_sets["tip"]]),
+    )
+    np.testing.assert_allclose(np.hypot(tube.nodes[:, 1], tube.nodes[:, 2]), 1.0)
 
 
 def test_case_file_reads_the_cylinder_generator():
