@@ -433,6 +433,16 @@ MORE = [
         "n_cap",
     ),
     ("refine negative", replace(R, R + "\nrefine = -1"), "'refine'"),
+    (
+        "support moment_about short",
+        replace(FIRST, FIRST + "\nmoment_about = [1.0, 2.0]"),
+        "'moment_about' must be a list of 3",
+    ),
+    (
+        "support moment_about text",
+        replace(FIRST, FIRST + '\nmoment_about = ["a", 0.0, 0.0]'),
+        "'moment_about' has a bad component",
+    ),
     ("refine float", replace(R, R + "\nrefine = 1.5"), "'refine'"),
     ("units a number", replace(R, R + "\nunits = 3"), "'units' must be a string or a table"),
     (

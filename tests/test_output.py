@@ -218,6 +218,12 @@ def test_history(solved, written):
         "taut",
         "wrinkled",
         "slack",
+        "strain_energy",
+        "external_work",
+        "taut_area",
+        "wrinkled_area",
+        "slack_area",
+        "max_principal_stress",
         "bottom_Fx",
         "bottom_Fy",
         "bottom_Fz",
@@ -243,6 +249,11 @@ def test_history(solved, written):
         for label in ("bottom", "top"):
             force = [float(row[f"{label}_F{c}"]) for c in "xyz"]
             assert force == entry["reactions"][label]  # full precision in both files
+        for key in ("strain_energy", "external_work"):
+            assert float(row[key]) == entry[key]
+        for state in ("taut", "wrinkled", "slack"):
+            assert float(row[f"{state}_area"]) == entry["areas"][state]
+        assert float(row["max_principal_stress"]) == entry["max_principal_stress"]["value"]
         u = step.displacement.reshape(-1, 3)
         for probe, nodes in probes_of(model).items():
             mean = [float(row[f"{probe}_u{c}"]) for c in "xyz"]

@@ -846,16 +846,17 @@ def _read_bending(
 
 
 def _read_support(reader: _Reader, model: Model, table: dict, where: str) -> None:
-    reader.keys(table, where, {"nodes"}, {"fix", "displacement", "label"})
+    reader.keys(table, where, {"nodes"}, {"fix", "displacement", "label", "moment_about"})
     if ("fix" in table) == ("displacement" in table):
         reader.fail(where, "give either 'fix' or 'displacement'")
     nodes = reader.nodes(model.mesh, table, where)
     label = reader.string(table, "label", where) if "label" in table else table["nodes"]
+    point = reader.vector(table, "moment_about", where) if "moment_about" in table else None
     if "fix" in table:
         fix = table["fix"]
         if not isinstance(fix, list) or not fix or any(c not in ("x", "y", "z") for c in fix):
             reader.fail(where, f'\'fix\' must be a list drawn from "x", "y", "z", got {fix!r}')
-        model.fix(nodes, fix, label=label)
+        model.fix(nodes, fix, label=label, moment_about=point)
         return
     components = reader.vector(table, "displacement", where, allow_free=True, expressions=True)
     X = model.mesh.nodes[nodes]
@@ -867,7 +868,7 @@ def _read_support(reader: _Reader, model: Model, table: dict, where: str) -> Non
             values[:, c] = evaluate_expression(value, X)
         except ValueError as error:
             reader.fail(where, f"displacement {'xyz'[c]}: {error}")
-    model.prescribe(nodes, values, label=label)
+    model.prescribe(nodes, values, label=label, moment_about=point)
 
 
 def _read_load(reader: _Reader, model: Model, table: dict, where: str) -> None:

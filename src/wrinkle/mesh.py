@@ -415,8 +415,8 @@ def cylinder(
     Node sets: "root" and "tip" (the wall's end circles), "root_cap" and "tip_cap" (all nodes
     of a cap, its circle included). Element sets: "wall", "root_cap", "tip_cap". With
     n_cap = 0 the tube is open (the wall alone, no caps or their sets: a tube between two
-    rings, such as a catenoid's start). With caps the surface is closed (every edge is shared by exactly two triangles) and encloses the prism on the
-    inscribed polygon, volume n_circumferential / 2 sin(2 pi / n_circumferential)
+    rings, such as a catenoid's start). With caps the surface is closed (every edge is
+    shared by exactly two triangles) and encloses the prism on the inscribed polygon, volume n_circumferential / 2 sin(2 pi / n_circumferential)
     radius**2 length, which tends to pi radius**2 length with an error of order
     (1 / n_circumferential)**2.
     """

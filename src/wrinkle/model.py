@@ -37,7 +37,7 @@ from wrinkle.kinematics import (
 from wrinkle.loads import boundary_edges, edge_dead_forces, edge_follower_forces
 from wrinkle.materials.base import Material
 from wrinkle.mesh import Mesh
-from wrinkle.post import support_reactions
+from wrinkle.post import support_moments, support_reactions
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import select_nodes
 from wrinkle.sequencing import NestedStart
@@ -83,6 +83,7 @@ class Support:
     label: str
     nodes: np.ndarray
     dofs: np.ndarray
+    moment_about: np.ndarray | None = None  # (3,): report the reaction's moment about it
 
 
 def _indices(selection: ArrayLike, count: int, what: str) -> np.ndarray:
@@ -280,9 +281,20 @@ class Model:
         return self._pattern
 
     # -- supports and loads -------------------------------------------------------------
-    def _add_support(self, nodes: np.ndarray, dofs: np.ndarray, label: str | None) -> None:
+    def _add_support(
+        self,
+        nodes: np.ndarray,
+        dofs: np.ndarray,
+        label: str | None,
+        moment_about: ArrayLike | None = None,
+    ) -> None:
         label = label or f"support {len(self.supports) + 1}"
-        self.supports.append(Support(label, nodes, np.unique(dofs)))
+        point = None
+        if moment_about is not None:
+            point = np.asarray(moment_about, dtype=float)
+            if point.shape != (3,) or not np.all(np.isfinite(point)):
+                raise ValueError(f"moment_about must be a point [x, y, z], got {moment_about!r}")
+        self.supports.append(Support(label, nodes, np.unique(dofs), point))
         self._changed()
 
     def fix(
@@ -290,13 +302,15 @@ class Model:
         nodes: NodeSelection,
         components: str | Sequence[str] = "xyz",
         label: str | None = None,
+        moment_about: ArrayLike | None = None,
     ) -> None:
-        """Hold the given displacement components of ``nodes`` at zero."""
+        """Hold the given displacement components of ``nodes`` at zero. moment_about: a point
+        (3,) about which the results report the support's reaction moment."""
         chosen = self._node_indices(nodes)
         dofs = (DOFS_PER_NODE * chosen[:, None] + np.array(_component_indices(components))).ravel()
         self.constrained[dofs] = True
         self.prescribed[dofs] = 0.0
-        self._add_support(chosen, dofs, label)
+        self._add_support(chosen, dofs, label, moment_about)
 
     def hold_in_place(self) -> None:
         """Make every prescribed displacement zero: the supports then hold their components
@@ -306,11 +320,16 @@ class Model:
         self._changed()
 
     def prescribe(
-        self, nodes: NodeSelection, displacement: ArrayLike, label: str | None = None
+        self,
+        nodes: NodeSelection,
+        displacement: ArrayLike,
+        label: str | None = None,
+        moment_about: ArrayLike | None = None,
     ) -> None:
         """Prescribe displacements reached at load factor 1.
 
         displacement: (3,) for all nodes or (k, 3) per node; a NaN component is left free.
+        moment_about: as for ``fix``.
         """
         chosen = self._node_indices(nodes)
         values = np.broadcast_to(np.asarray(displacement, dtype=float), (chosen.size, 3))
@@ -318,7 +337,7 @@ class Model:
         set_ = ~np.isnan(values)
         self.constrained[dofs[set_]] = True
         self.prescribed[dofs[set_]] = values[set_]
-        self._add_support(chosen, dofs[set_], label)
+        self._add_support(chosen, dofs[set_], label, moment_about)
 
     def add_nodal_force(self, nodes: NodeSelection, force: ArrayLike) -> None:
         """Add a dead nodal force (3,) or (k, 3), reached at load factor 1."""
@@ -524,6 +543,15 @@ class Model:
         """Sum of the reactions (n_dofs,) over the dofs each support holds (supports with the
         same label together, a component they share counted once): label -> [Fx, Fy, Fz]."""
         return support_reactions(self.supports, reactions)
+
+    def support_moments(
+        self, reactions: np.ndarray, displacement: np.ndarray
+    ) -> dict[str, list[float]]:
+        """The moment of each support's reactions (n_dofs,) about its ``moment_about`` point,
+        at the nodes' positions X + u (u = displacement, (n_dofs,)): label -> [Mx, My, Mz],
+        for the supports that name a point (``wrinkle.post.support_moments``)."""
+        positions = self.mesh.nodes + np.asarray(displacement, dtype=float).reshape(-1, 3)
+        return support_moments(self.supports, reactions, positions)
 
     def check_supports(self) -> None:
         """Raise ValueError if the supports leave a rigid-body motion free: the six motions

@@ -24,9 +24,13 @@
   "accuracy"), and for "accuracy" "accuracy_stop": {"residual" (relative to the force scale),
   "energy_gap", "discretisation_error", "contraction", "remaining_change": {quantity:
   value}} (``wrinkle.solvers.stopping``), and "pressure" where the model has pressure loads
-  and "enclosed_volume" where they enclose a volume (``StepResult``)}], "wall_time" (seconds
-  since the writer was made), "reference_volume" where the membrane encloses a volume, and
-  "units" and "case" if given}.
+  and "enclosed_volume" where they enclose a volume (``StepResult``), "strain_energy",
+  "external_work" (trapezoidal rule over the steps, ``ResultWriter._quantities``), "areas"
+  {"taut", "wrinkled", "slack"} (current), "max_principal_stress" {"value", "element",
+  "position"}, and "moments" {label: [Mx, My, Mz]} for supports with ``moment_about``}],
+  "wall_time" (seconds since the writer was made), "reference_volume" where the membrane
+  encloses a volume, the last step's "strain_energy", "external_work" and
+  "enclosed_volume", and "units" and "case" if given}.
 - with ``write_modes`` (a case's ``[modes]``): ``mode_01.vtu``, ``mode_02.vtu``, ...: the
   mesh in the reference configuration with point data ``displacement`` (the state the modes
   are about) and ``mode`` (the mode shape, scaled to a largest nodal amplitude of 1, length
@@ -36,9 +40,10 @@
   summary ``"frequencies"`` (1/time, Hz in SI units, ascending) and ``"modes"``: {"mass",
   "shift" (1/time^2), "files", "residuals"} (``wrinkle.modes.Modes``).
 - ``history.csv``: one row per step: step, load_factor, iterations, residual, then pressure
-  and enclosed_volume where the summary has them, taut, wrinkled, slack,
-  ``<support>_Fx/_Fy/_Fz`` per support, ``<probe>_ux/_uy/_uz`` per probe (mean displacement
-  of the probe's nodes).
+  and enclosed_volume where the summary has them, taut, wrinkled, slack, strain_energy,
+  external_work, taut_area, wrinkled_area, slack_area, max_principal_stress,
+  ``<support>_Fx/_Fy/_Fz`` per support, ``<support>_Mx/_My/_Mz`` per support with a moment
+  point, ``<probe>_ux/_uy/_uz`` per probe (mean displacement of the probe's nodes).
 
 Every file is written to a temporary file in ``out_dir`` and moved into place with
 ``os.replace``, so a crash or Ctrl-C leaves every finished step readable, and ``summary.json``
@@ -67,7 +72,13 @@ import numpy as np
 
 from wrinkle.cables import CableState
 from wrinkle.mesh import require_meshio
-from wrinkle.post import element_report, nodal_average, support_reactions
+from wrinkle.post import (
+    ElementReport,
+    element_report,
+    nodal_average,
+    support_moments,
+    support_reactions,
+)
 from wrinkle.wrinkling import STATE_NAMES
 
 __all__ = [
@@ -192,6 +203,13 @@ class ResultWriter:
         self.modes: dict | None = None  # the summary's "modes" (write_modes)
         self.form_finding: dict | None = None  # the summary's "formfinding" (Case.run)
         self._last_displacement = np.zeros(model.n_dofs if hasattr(model, "n_dofs") else 0)
+        self._last_forces: np.ndarray | None = None  # f* at the last step (external work)
+        self._work = 0.0  # the loads' and supports' work up to the last step
+        self.moment_labels = list(
+            dict.fromkeys(
+                str(s.label) for s in self.supports if getattr(s, "moment_about", None) is not None
+            )
+        )
         self.frequencies: list[float] | None = None
         # the pressure column where the model has pressure loads, the enclosed volume where
         # they enclose one (``DiscreteSystem.volume_closure``)
@@ -224,11 +242,16 @@ class ResultWriter:
         index = len(self.steps) + 1
         name = step_file_name(index)
         path = self.out_dir / name
-        self._write_vtu(path, step)
-        self._last_displacement = np.asarray(step.displacement, dtype=float)
-        u = np.asarray(step.displacement, dtype=float).reshape(-1, 3)
+        displacement = np.asarray(step.displacement, dtype=float)
+        report = element_report(self.model, displacement)
+        self._write_vtu(path, step, report)
+        u = displacement.reshape(-1, 3)
         reactions = np.asarray(step.reactions, dtype=float)
         support_forces = support_reactions(self.supports, reactions)
+        positions = self.model.mesh.nodes + u
+        moments = support_moments(self.supports, reactions, positions)
+        quantities = self._quantities(displacement, report, positions)
+        self._last_displacement = displacement
         probe_means = {name: u[nodes].mean(axis=0) for name, nodes in self.probes.items()}
         states = [int(s) for s in step.states]
         entry = {
@@ -242,9 +265,9 @@ class ResultWriter:
             "max_displacement": float(np.linalg.norm(u, axis=1).max(initial=0.0)),
             "stopped_by": getattr(step, "stopped_by", "residual"),
         }
-        report = getattr(step, "stop_report", None)
-        if report is not None:
-            entry["accuracy_stop"] = {key: value for key, value in report.items() if key != "rule"}
+        stop = getattr(step, "stop_report", None)
+        if stop is not None:
+            entry["accuracy_stop"] = {key: value for key, value in stop.items() if key != "rule"}
         extra: list[float | None] = []
         for name, present in (
             ("pressure", self.has_pressure),
@@ -255,6 +278,9 @@ class ResultWriter:
                 number = None if value is None else float(value)
                 entry[name] = number
                 extra.append(number)
+        entry.update(quantities)
+        if moments:
+            entry["moments"] = moments
         cables = self.cable_state(step)
         if cables is not None and self.system is not None and self.system.cables is not None:
             entry["cables"] = self.system.cables.summary(cables.axial, cables.taut)
@@ -262,8 +288,13 @@ class ResultWriter:
         row: list = [index, float(step.load_factor), int(step.iterations), float(step.residual)]
         row += extra
         row += states
+        row += [quantities[key] for key in ("strain_energy", "external_work")]
+        row += [quantities["areas"][state] for state in STATE_NAMES]
+        row.append(quantities["max_principal_stress"]["value"])
         for force in support_forces.values():
             row += force
+        for label in self.moment_labels:
+            row += moments[label]
         for mean in probe_means.values():
             row += mean.tolist()
         self.rows.append(row)
@@ -271,6 +302,40 @@ class ResultWriter:
         self._write_history()
         self._write_summary(False, "running")
         return path
+
+    def _quantities(
+        self, u: np.ndarray, report: ElementReport, positions: np.ndarray
+    ) -> dict:
+        """The step's "strain_energy" (``DiscreteSystem.strain_energy_and_forces``),
+        "external_work" (the loads' and the supports' work from the reference state, by the
+        trapezoidal rule over the steps on the internal forces f*, which at a balanced state
+        are the applied loads plus the reactions), "areas" (current area of each state) and
+        "max_principal_stress" ({"value", "element", "position"}: the largest major principal
+        Cauchy stress resultant, its element and the element's current centroid)."""
+        if self.system is not None:
+            energy, forces = self.system.strain_energy_and_forces(u)
+            previous = self._last_forces
+            if previous is None:
+                previous = self.system.strain_energy_and_forces(np.zeros_like(u))[1]
+            self._work += 0.5 * float((previous + forces) @ (u - self._last_displacement))
+            self._last_forces = forces
+        else:
+            energy = float("nan")
+            self._work = float("nan")
+        areas = np.bincount(report.state, weights=report.area, minlength=len(STATE_NAMES))
+        major = report.principal_stress[:, 1]
+        largest = int(np.argmax(major))
+        centroid = positions[self.model.mesh.triangles[largest]].mean(axis=0)
+        return {
+            "strain_energy": energy,
+            "external_work": self._work,
+            "areas": dict(zip(STATE_NAMES, (float(a) for a in areas), strict=True)),
+            "max_principal_stress": {
+                "value": float(major[largest]),
+                "element": largest,
+                "position": centroid.tolist(),
+            },
+        }
 
     def cable_state(self, step) -> CableState | None:
         """The cables' ``CableState`` at a step (None without cables), computed once."""
@@ -326,10 +391,9 @@ class ResultWriter:
         return self._write_summary(bool(converged), str(message))
 
     # -- files --------------------------------------------------------------------------
-    def _write_vtu(self, path: Path, step) -> None:
+    def _write_vtu(self, path: Path, step, report: ElementReport) -> None:
         meshio = require_meshio()
         mesh = self.model.mesh
-        report = element_report(self.model, np.asarray(step.displacement, dtype=float))
         cell_data = {
             "state": report.state.astype(np.int32),
             "tension_direction": report.tension_direction,
@@ -399,8 +463,13 @@ class ResultWriter:
         header += ["pressure"] if self.has_pressure else []
         header += ["enclosed_volume"] if self.has_volume else []
         header += STATE_NAMES
+        header += ["strain_energy", "external_work"]
+        header += [f"{state}_area" for state in STATE_NAMES]
+        header += ["max_principal_stress"]
         for label in self.support_labels:
             header += [f"{label}_Fx", f"{label}_Fy", f"{label}_Fz"]
+        for label in self.moment_labels:
+            header += [f"{label}_Mx", f"{label}_My", f"{label}_Mz"]
         for name in self.probes:
             header += [f"{name}_ux", f"{name}_uy", f"{name}_uz"]
         return header
@@ -421,6 +490,11 @@ class ResultWriter:
         }
         if self.reference_volume is not None:
             summary["reference_volume"] = self.reference_volume
+        if self.steps:  # the last step's energies and volume, as the issue's checks read them
+            last = self.steps[-1]
+            for key in ("strain_energy", "external_work", "enclosed_volume"):
+                if key in last:
+                    summary[key] = last[key]
         if self.form_finding is not None:
             summary["formfinding"] = self.form_finding
         if self.frequencies is not None:

@@ -43,6 +43,7 @@ __all__ = [
     "material_response",
     "nodal_average",
     "plane_quantities",
+    "support_moments",
     "support_reactions",
 ]
 
@@ -291,4 +292,31 @@ def support_reactions(
     for label, dofs_list in held.items():
         dofs = np.unique(np.concatenate(dofs_list)).astype(np.int64)
         out[label] = np.bincount(dofs % 3, reactions[dofs], minlength=3).tolist()
+    return out
+
+
+def support_moments(
+    supports: Sequence[HeldDofs], reactions: np.ndarray, positions: np.ndarray
+) -> dict[str, list[float]]:
+    """The moment sum (x_i - p) x R_i of each support's reactions (n_dofs,) about its point
+    p (``moment_about``), with x_i the current positions (n_nodes, 3) of its nodes and R_i
+    the reaction components it holds (as ``support_reactions``): label -> [Mx, My, Mz]
+    (force x length), for the supports that name a point; supports sharing a label share
+    the first point given."""
+    held: dict[str, list[np.ndarray]] = {}
+    points: dict[str, np.ndarray] = {}
+    for support in supports:
+        point = getattr(support, "moment_about", None)
+        label = str(support.label)
+        held.setdefault(label, []).append(np.asarray(support.dofs).ravel())
+        if point is not None:
+            points.setdefault(label, np.asarray(point, dtype=float))
+    out = {}
+    for label, point in points.items():
+        dofs = np.unique(np.concatenate(held[label])).astype(np.int64)
+        force = np.zeros((positions.shape[0], 3))
+        force.reshape(-1)[dofs] = reactions[dofs]
+        nodes = np.unique(dofs // 3)
+        arm = positions[nodes] - point
+        out[label] = np.cross(arm, force[nodes]).sum(axis=0).tolist()
     return out

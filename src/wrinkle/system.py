@@ -618,12 +618,21 @@ class DiscreteSystem:
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
         """Global internal force vector f* (membrane, bending and cables), (n_dofs,)."""
-        forces = self.pattern.assemble_vector(self.evaluate_elements(u, stiffness=False).forces)
-        if self.bending is not None:
-            forces += self.bending.forces(u)
+        return self.strain_energy_and_forces(u)[1]
+
+    def strain_energy_and_forces(self, u: np.ndarray) -> tuple[float, np.ndarray]:
+        """The stored energy at u (n_dofs,): the membrane's relaxed strain energy (with its
+        prestress's work) plus the bending and the cables' energies (energy units), and the
+        internal force vector f* = dU/du, (n_dofs,), from one evaluation of the elements."""
+        result = self.evaluate_elements(u, stiffness=False)
+        forces = self.pattern.assemble_vector(result.forces)
+        energy = float(np.sum(result.energy))
+        energy += self.add_bending(u, forces, None)
         if self.cables is not None:
-            forces += self.cable_state(u, tangent=False).forces
-        return forces
+            state = self.cable_state(u, tangent=False)
+            forces += state.forces
+            energy += state.energy
+        return energy, forces
 
     def cable_state(self, u: np.ndarray, tangent: bool = True) -> CableState:
         """The cables at the displacements u (n_dofs,) (``Cables.state``); ValueError
