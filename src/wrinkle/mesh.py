@@ -416,9 +416,9 @@ def cylinder(
     of a cap, its circle included). Element sets: "wall", "root_cap", "tip_cap". With
     n_cap = 0 the tube is open (the wall alone, no caps or their sets: a tube between two
     rings, such as a catenoid's start). With caps the surface is closed (every edge is
-    shared by exactly two triangles) and encloses the prism on the inscribed polygon, volume n_circumferential / 2 sin(2 pi / n_circumferential)
-    radius**2 length, which tends to pi radius**2 length with an error of order
-    (1 / n_circumferential)**2.
+    shared by exactly two triangles) and encloses the prism on the inscribed polygon, volume
+    n_circumferential / 2 sin(2 pi / n_circumferential) radius**2 length, which tends to
+    pi radius**2 length with an error of order (1 / n_circumferential)**2.
     """
     radius = _check_length("cylinder", "radius", radius)
     length = _check_length("cylinder", "length", length)
