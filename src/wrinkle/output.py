@@ -303,9 +303,7 @@ class ResultWriter:
         self._write_summary(False, "running")
         return path
 
-    def _quantities(
-        self, u: np.ndarray, report: ElementReport, positions: np.ndarray
-    ) -> dict:
+    def _quantities(self, u: np.ndarray, report: ElementReport, positions: np.ndarray) -> dict:
         """The step's "strain_energy" (``DiscreteSystem.strain_energy_and_forces``),
         "external_work" (the loads' and the supports' work from the reference state, by the
         trapezoidal rule over the steps on the internal forces f*, which at a balanced state

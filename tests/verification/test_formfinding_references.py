@@ -24,6 +24,7 @@ def test_catenoid_meets_the_rings_and_has_zero_mean_curvature(span):
     step = 1e-6
     slope = (profile(x + step, R, span) - profile(x - step, R, span)) / (2 * step)
     np.testing.assert_allclose(profile(x, R, span) / np.sqrt(1 + slope**2), r0, rtol=1e-8)
+
     def half_span(r):
         return r * math.acosh(R / r)
 
