@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from wrinkle import __version__
-from wrinkle.solvers import ConvergenceError
+from wrinkle.solvers import ConvergenceError, listening
 
 __all__ = ["main"]
 
@@ -47,7 +47,8 @@ def _run(args: argparse.Namespace) -> int:
         raise ValueError(f"--out {out}: is a file, not a folder for the results")
     progress = Progress(quiet=args.quiet)
     try:
-        case.run(args.out, on_step=progress.step, loads=not form_only)
+        with listening(progress.iteration):
+            case.run(args.out, on_step=progress.step, loads=not form_only)
     except (FormFindingError, NoModesError) as error:
         progress.close()
         print(f"wrinkle: {error}", file=sys.stderr)

@@ -1,7 +1,13 @@
 """Nonlinear solvers (the default regularised Newton and the paper's restricted step), their
 settings, and the load-path followers."""
 
-from wrinkle.solvers.base import ConvergenceError, Evaluation, SolverResult
+from wrinkle.solvers.base import (
+    ConvergenceError,
+    Evaluation,
+    IterationListener,
+    SolverResult,
+    listening,
+)
 from wrinkle.solvers.linear import LINEAR_SOLVERS
 from wrinkle.solvers.newton import RegularisedNewton
 from wrinkle.solvers.restricted_step import RestrictedStep
@@ -20,12 +26,14 @@ __all__ = [
     "SOLVERS",
     "ConvergenceError",
     "Evaluation",
+    "IterationListener",
     "RegularisedNewton",
     "RestrictedStep",
     "SolverResult",
     "SolverSettings",
     "StepController",
     "follow_load_path",
+    "listening",
     "make_solver",
     "solve_step",
     "tangent_prediction",

@@ -5,7 +5,9 @@ from __future__ import annotations
 import logging
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -32,6 +34,8 @@ __all__ = [
     "SolverResult",
     "StopRule",
     "is_converged",
+    "IterationListener",
+    "listening",
     "log_iteration",
     "shifted",
     "stiffness_scale",
@@ -234,9 +238,34 @@ def shifted(
     return sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
 
 
+IterationListener = Callable[[str, int, float, tuple[int, int, int]], None]
+"""Called after each nonlinear iteration with the solver's name, the iteration number, the
+residual relative to the force scale and the (taut, wrinkled, slack) element counts."""
+
+_listeners: ContextVar[tuple[IterationListener, ...]] = ContextVar("listeners", default=())
+
+
+@contextmanager
+def listening(listener: IterationListener) -> Iterator[None]:
+    """Within the block, every nonlinear iteration of every solver (in this thread or task)
+    is reported to ``listener`` (a progress display, say), as ``log_iteration`` logs it."""
+    token = _listeners.set((*_listeners.get(), listener))
+    try:
+        yield
+    finally:
+        _listeners.reset(token)
+
+
 def log_iteration(method: str, iteration: int, evaluation: Evaluation, theta: float | None) -> None:
-    """One line per iteration on the ``wrinkle.solver`` logger (theta None: not yet chosen)."""
+    """One line per iteration on the ``wrinkle.solver`` logger (theta None: not yet chosen),
+    and the same to the listeners of ``listening``."""
     taut, wrinkled, slack = evaluation.states
+    listeners = _listeners.get()
+    if listeners:
+        scale = evaluation.force_scale
+        relative = evaluation.residual_norm / scale if scale > 0 else evaluation.residual_norm
+        for listener in listeners:
+            listener(method, iteration, float(relative), (taut, wrinkled, slack))
     logger.info(
         "%s iteration %3d: residual %.3e (scale %.3e), theta %s, taut %d, wrinkled %d, slack %d",
         method,
