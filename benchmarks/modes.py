@@ -7,9 +7,11 @@ set of one factorisation of K_ff - sigma M_ff (sigma the default shift, ``wrinkl
 by each back-end, and of the shift-invert solve of the lowest --count modes
 (``solve_eigenproblem``: that factorisation plus the Lanczos iterations, each one solve),
 with the number of solves, as it is ("new": ARPACK at ``TOLERANCE``, PARDISO with
-``PARDISO_REFINEMENT`` refinement steps) and as it was ("old": ARPACK at machine precision,
-PARDISO's default two refinement steps); and SciPy's own shift-invert (``eigsh(sigma=...)``,
-its SuperLU of K - sigma M with SciPy's default ordering) for comparison. Times and memory
+``PARDISO_REFINEMENT`` refinement steps, OpenBLAS on ``LANCZOS_BLAS_THREADS`` threads where
+threadpoolctl is installed) and as it was ("old": ARPACK at machine precision, PARDISO's
+default two refinement steps, OpenBLAS's threads as they are); and SciPy's own
+shift-invert (``eigsh(sigma=...)``, its SuperLU of K - sigma M with SciPy's default
+ordering) for comparison. Times and memory
 are medians of --repeats runs, old and new in turns; the eigenvalues of old and new are
 compared. The issue's target: at most five factorisations' worth of time and memory. Peak
 memory from VmHWM (Linux /proc), reset before each measurement. Also checks the lowest
@@ -134,13 +136,16 @@ class CountingSolver:
 @contextmanager
 def settings(method: str):
     """``solve_eigenproblem`` as it is ("new") or as it was ("old")."""
-    saved = modes_module.TOLERANCE, modes_module.PARDISO_REFINEMENT
+    names = ("TOLERANCE", "PARDISO_REFINEMENT", "LANCZOS_BLAS_THREADS")
+    saved = [getattr(modes_module, name) for name in names]
     if method == "old":
-        modes_module.TOLERANCE, modes_module.PARDISO_REFINEMENT = 0.0, None
+        for name, value in zip(names, (0.0, None, None), strict=True):
+            setattr(modes_module, name, value)
     try:
         yield
     finally:
-        modes_module.TOLERANCE, modes_module.PARDISO_REFINEMENT = saved
+        for name, value in zip(names, saved, strict=True):
+            setattr(modes_module, name, value)
 
 
 def modal_run(name: str, method: str, K, M, count: int):

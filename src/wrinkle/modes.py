@@ -30,6 +30,7 @@ a wrinkled sheet) are reported as negative frequencies, f = -sqrt(-lambda) / 2 p
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -77,6 +78,12 @@ TOLERANCE = 1e-10
 # the most iterative-refinement steps of each PARDISO solve (``Pardiso.refinement``): none,
 # unless the factorisation perturbed pivots; None keeps MKL's default of two
 PARDISO_REFINEMENT: int | None = 0
+# OpenBLAS threads in the Lanczos iterations (threadpoolctl, where installed; None leaves
+# them): ARPACK's work is products of a tall (n, ncv) matrix and a vector, and with two
+# threads on two cores that another process shares it took 2.4 s instead of 0.3 s, the
+# SuperLU solves 0.08 s instead of 0.04 s (benchmarks/modes.py); MKL's threads (PARDISO)
+# are left alone
+LANCZOS_BLAS_THREADS: int | None = 1
 
 # int psi_a psi_b dA0 / A0 of the linear triangle, spread over the three components
 _CONSISTENT = np.kron((np.ones((3, 3)) + np.eye(3)) / 12.0, np.eye(3)).reshape(81)
@@ -114,6 +121,18 @@ def mass_matrix(
     if kind == "lumped":
         return sp.diags(lumped_mass(pattern, area, mass_per_area)).tocsr()
     raise ValueError(f"unknown mass '{kind}' (one of {', '.join(MASS_KINDS)})")
+
+
+def blas_threads(limit: int | None) -> contextlib.AbstractContextManager:
+    """A context in which OpenBLAS uses at most ``limit`` threads (threadpoolctl); nothing
+    for limit None or without threadpoolctl."""
+    if limit is None:
+        return contextlib.nullcontext()
+    try:
+        from threadpoolctl import threadpool_limits  # type: ignore[import-untyped, import-not-found, unused-ignore]
+    except ImportError:
+        return contextlib.nullcontext()
+    return threadpool_limits(limits={"libscipy_openblas": limit})  # NumPy's and SciPy's
 
 
 @dataclass(frozen=True)
@@ -201,9 +220,10 @@ def solve_eigenproblem(
                 )
             inverse = spla.LinearOperator((n, n), matvec=solve, dtype=float)
             arpack = spla.eigsh if symmetric else spla.eigs
-            values, vectors = arpack(
-                K, wanted, M, sigma=sigma, which="LM", OPinv=inverse, tol=TOLERANCE
-            )
+            with blas_threads(LANCZOS_BLAS_THREADS):
+                values, vectors = arpack(
+                    K, wanted, M, sigma=sigma, which="LM", OPinv=inverse, tol=TOLERANCE
+                )
         finally:
             linear.release()
     if np.iscomplexobj(values):
