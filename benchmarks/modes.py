@@ -6,12 +6,18 @@ uniform tension, made by moving its edges to a 1 % biaxial stretch, meshed with 
 set of one factorisation of K_ff - sigma M_ff (sigma the default shift, ``wrinkle.modes``)
 by each back-end, and of the shift-invert solve of the lowest --count modes
 (``solve_eigenproblem``: that factorisation plus the Lanczos iterations, each one solve),
-with the number of solves; and SciPy's own shift-invert (``eigsh(sigma=...)``, its SuperLU of
-K - sigma M with SciPy's default ordering) for comparison. The issue's target: at most five
-factorisations' worth of time and memory. Peak memory from VmHWM (Linux /proc), reset before
-each measurement. Also checks the lowest frequency against f_11 of the membrane.
+with the number of solves, as it is ("new": ARPACK at ``TOLERANCE``, PARDISO with
+``PARDISO_REFINEMENT`` refinement steps, OpenBLAS on ``LANCZOS_BLAS_THREADS`` threads where
+threadpoolctl is installed) and as it was ("old": ARPACK at machine precision, PARDISO's
+default two refinement steps, OpenBLAS's threads as they are); and SciPy's own
+shift-invert (``eigsh(sigma=...)``, its SuperLU of K - sigma M with SciPy's default
+ordering) for comparison. Times and memory
+are medians of --repeats runs, old and new in turns; the eigenvalues of old and new are
+compared. The issue's target: at most five factorisations' worth of time and memory. Peak
+memory from VmHWM (Linux /proc), reset before each measurement. Also checks the lowest
+frequency against f_11 of the membrane.
 
-    python benchmarks/modes.py --elements 100000 --count 10
+    python benchmarks/modes.py --elements 100000 --count 10 --repeats 3
 """
 
 from __future__ import annotations
@@ -20,7 +26,9 @@ import argparse
 import gc
 import math
 import platform
+import statistics
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -99,6 +107,13 @@ class CountingSolver:
         self.inner, self.solves = inner, 0
         if hasattr(inner, "factorise_with_inertia"):
             self.factorise_with_inertia = self._with_inertia
+        if hasattr(inner, "refinement"):  # PARDISO's, set by solve_eigenproblem
+            self.refinement = inner.refinement
+
+    def __setattr__(self, name, value):
+        super().__setattr__(name, value)
+        if name == "refinement":
+            self.inner.refinement = value
 
     def _count(self, solve):
         def counted(b):
@@ -118,18 +133,23 @@ class CountingSolver:
         self.inner.release()
 
 
-def backend_row(name: str, K, M, sigma: float, count: int, f11: float) -> dict | None:
-    """One factorisation of K - sigma M and the modal solve with back-end ``name``."""
-    n = K.shape[0]
+@contextmanager
+def settings(method: str):
+    """``solve_eigenproblem`` as it is ("new") or as it was ("old")."""
+    names = ("TOLERANCE", "PARDISO_REFINEMENT", "LANCZOS_BLAS_THREADS")
+    saved = [getattr(modes_module, name) for name in names]
+    if method == "old":
+        for name, value in zip(names, (0.0, None, None), strict=True):
+            setattr(modes_module, name, value)
     try:
-        linear = make_linear_solver(name, n)
-    except ImportError as error:
-        print(f"{name}: not available ({error})")
-        return None
-    shifted = (K - sigma * M).tocsr()
-    shifted.sort_indices()
-    _, factor_time, factor_mb = measure(lambda: linear.factorise(shifted, True))
-    linear.release()
+        yield
+    finally:
+        for name, value in zip(names, saved, strict=True):
+            setattr(modes_module, name, value)
+
+
+def modal_run(name: str, method: str, K, M, count: int):
+    """(eigenvalues, seconds, peak MB, solves) of one modal solve with back-end ``name``."""
     counting: list[CountingSolver] = []
 
     def counting_factory(requested: str, size: int) -> CountingSolver:
@@ -139,29 +159,64 @@ def backend_row(name: str, K, M, sigma: float, count: int, f11: float) -> dict |
     original = modes_module.make_linear_solver
     modes_module.make_linear_solver = counting_factory
     try:
-        (values, _, _), modal_time, modal_mb = measure(
-            lambda: solve_eigenproblem(K, M, count, True)
-        )
+        with settings(method):
+            (values, _, _), seconds, mb = measure(lambda: solve_eigenproblem(K, M, count, True))
     finally:
         modes_module.make_linear_solver = original
-    f1 = math.sqrt(values[0]) / (2 * math.pi)
-    return {
-        "method": f"wrinkle {name}",
-        "factorisation_s": factor_time,
-        "factorisation_MB": factor_mb,
-        "modes_s": modal_time,
-        "modes_MB": modal_mb,
-        "solves": counting[-1].solves,
-        "time_ratio": modal_time / factor_time,
-        "memory_ratio": modal_mb / factor_mb,
-        "f1_error": f1 / f11 - 1,
-    }
+    return values, seconds, mb, counting[-1].solves
+
+
+def backend_rows(name: str, K, M, sigma: float, count: int, f11: float, repeats: int):
+    """One factorisation of K - sigma M and the old and new modal solves with back-end
+    ``name``, medians of ``repeats`` runs each; [] if the back-end is not installed."""
+    n = K.shape[0]
+    try:
+        make_linear_solver(name, n).release()
+    except ImportError as error:
+        print(f"{name}: not available ({error})")
+        return []
+    shifted = (K - sigma * M).tocsr()
+    shifted.sort_indices()
+    factor_times, factor_mbs = [], []
+    for _ in range(repeats):
+        linear = make_linear_solver(name, n)
+        _, seconds, mb = measure(lambda linear=linear: linear.factorise(shifted, True))
+        linear.release()
+        factor_times.append(seconds)
+        factor_mbs.append(mb)
+    factor_time, factor_mb = statistics.median(factor_times), statistics.median(factor_mbs)
+    runs: dict[str, list] = {"old": [], "new": []}
+    for _ in range(repeats):
+        for method in runs:
+            runs[method].append(modal_run(name, method, K, M, count))
+    old_values = runs["old"][0][0]
+    rows = []
+    for method, results in runs.items():
+        values = results[0][0]
+        modal_time = statistics.median(r[1] for r in results)
+        modal_mb = statistics.median(r[2] for r in results)
+        rows.append(
+            {
+                "method": f"{method} {name}",
+                "factorisation_s": factor_time,
+                "factorisation_MB": factor_mb,
+                "modes_s": modal_time,
+                "modes_MB": modal_mb,
+                "solves": results[0][3],
+                "time_ratio": modal_time / factor_time,
+                "memory_ratio": modal_mb / factor_mb,
+                "f1_error": math.sqrt(values[0]) / (2 * math.pi) / f11 - 1,
+                "vs_old": float(np.max(np.abs(values - old_values) / np.abs(old_values))),
+            }
+        )
+    return rows
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--elements", type=int, default=100_000)
     parser.add_argument("--count", type=int, default=10)
+    parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--csv", default="modes.csv")
     args = parser.parse_args()
     n_elements, K, M, f11 = membrane(args.elements)
@@ -169,12 +224,13 @@ def main() -> None:
     sigma = -SHIFT * float(np.mean(np.abs(K.diagonal()))) / float(np.mean(M.diagonal()))
     print(
         f"{platform.processor() or platform.machine()}, {n_elements:,} elements, "
-        f"{n:,} free components, {args.count} modes, sigma = {sigma:.3g} 1/s^2"
+        f"{n:,} free components, {args.count} modes, sigma = {sigma:.3g} 1/s^2, "
+        f"medians of {args.repeats}"
     )
     rows = [
         row
         for name in ("superlu", "pardiso")
-        if (row := backend_row(name, K, M, sigma, args.count, f11))
+        for row in backend_rows(name, K, M, sigma, args.count, f11, args.repeats)
     ]
     (values, _), modal_time, modal_mb = measure(
         lambda: spla.eigsh(K, args.count, M, sigma=sigma, which="LM")
@@ -191,18 +247,20 @@ def main() -> None:
             "time_ratio": modal_time / reference["factorisation_s"] if reference else math.nan,
             "memory_ratio": modal_mb / reference["factorisation_MB"] if reference else math.nan,
             "f1_error": math.sqrt(min(values)) / (2 * math.pi) / f11 - 1,
+            "vs_old": math.nan,
         }
     )
     header = (
         f"{'method':<20} {'factor s':>9} {'factor MB':>10} {'modes s':>8} {'modes MB':>9} "
-        f"{'solves':>7} {'x time':>7} {'x memory':>9} {'f1 error':>9}"
+        f"{'solves':>7} {'x time':>7} {'x memory':>9} {'f1 error':>9} {'vs old':>8}"
     )
     print(header)
     for row in rows:
         print(
             f"{row['method']:<20} {row['factorisation_s']:>9.2f} {row['factorisation_MB']:>10.0f} "
             f"{row['modes_s']:>8.2f} {row['modes_MB']:>9.0f} {row['solves']:>7} "
-            f"{row['time_ratio']:>7.2f} {row['memory_ratio']:>9.2f} {row['f1_error']:>9.2e}"
+            f"{row['time_ratio']:>7.2f} {row['memory_ratio']:>9.2f} {row['f1_error']:>9.2e} "
+            f"{row['vs_old']:>8.1e}"
         )
     write_csv(args.csv, rows, list(rows[0]))
 

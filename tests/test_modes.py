@@ -9,6 +9,7 @@ from pathlib import Path
 import meshio
 import numpy as np
 import pytest
+import scipy.linalg as la
 import scipy.sparse as sp
 from scipy.special import jn_zeros
 
@@ -16,6 +17,7 @@ from wrinkle import Model, StVenantKirchhoff, disk, rectangle
 from wrinkle.case import read_case
 from wrinkle.cli import main
 from wrinkle.modes import (
+    DENSE_LIMIT,
     consistent_mass,
     lumped_mass,
     natural_modes,
@@ -293,6 +295,34 @@ def test_the_lowest_are_found_below_the_shift_too():
     values, vectors, _ = solve_eigenproblem(K, M, 3, symmetric=True)
     np.testing.assert_allclose(values, [-2.5, 1.0, 2.0])
     np.testing.assert_allclose(np.abs(vectors[[0, 1, 2], [0, 1, 2]]), 1.0)
+
+
+@pytest.mark.parametrize("linear_solver", ["superlu", "pardiso"])
+def test_shift_invert_at_its_tolerance_equals_the_dense_solution(linear_solver):
+    """The tensioned 24 x 16 rectangle (1,035 free components, above DENSE_LIMIT, so
+    shift-invert Lanczos at ARPACK's tolerance TOLERANCE, and PARDISO without iterative
+    refinement): its ten lowest eigenvalues equal dense ``scipy.linalg.eigh``'s to 1e-10,
+    each vector an eigenpair to 1e-9 (|K phi - lambda M phi| / |K phi|), M-normalised."""
+    if linear_solver == "pardiso":
+        pytest.importorskip("pypardiso")
+    mesh = rectangle(1.0, 0.7, 24, 16)
+    x, y = mesh.nodes[:, 0], mesh.nodes[:, 1]
+    edge = np.isclose(x, 0) | np.isclose(x, 1) | np.isclose(y, 0) | np.isclose(y, 0.7)
+    model = stretched(mesh, np.flatnonzero(edge))
+    u = model.solve(steps=1).final.displacement
+    system = model.discretise()
+    free = ~system.constrained
+    K = system.at(1.0).evaluate(u).tangent[free][:, free].tocsr()
+    M = consistent_mass(system.pattern, system.geometry.area, model.mass_per_area())
+    M = M[free][:, free].tocsr()
+    assert K.shape[0] > DENSE_LIMIT
+    values, vectors, _ = solve_eigenproblem(K, M, 10, True, linear_solver=linear_solver)
+    reference = la.eigh(K.toarray(), M.toarray(), eigvals_only=True, subset_by_index=[0, 9])
+    np.testing.assert_allclose(values, reference, rtol=1e-10)
+    stiffness = K @ vectors
+    residual = np.linalg.norm(stiffness - (M @ vectors) * values, axis=0)
+    assert np.all(residual < 1e-9 * np.linalg.norm(stiffness, axis=0))
+    np.testing.assert_allclose(np.einsum("ik,ik->k", vectors, M @ vectors), 1.0, rtol=1e-12)
 
 
 def test_a_far_negative_eigenvalue_is_refused():

@@ -30,6 +30,7 @@ a wrinkled sheet) are reported as negative frequencies, f = -sqrt(-lambda) / 2 p
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -68,6 +69,21 @@ SHIFT = 1e-10
 DENSE_LIMIT = 600
 # an eigenvalue whose imaginary part is above this fraction of its modulus is complex
 COMPLEX = 1e-6
+# ARPACK's tolerance (``eigsh(tol=...)``, its Ritz estimates relative to each eigenvalue of
+# the inverted operator; 0 is machine precision): on the tensioned membrane of
+# benchmarks/modes.py 42 solves instead of 56 for ten modes, the eigenvalues the same to
+# 3e-15 and the eigen-residuals |K phi - lambda M phi| / |K phi| 3.4e-12 (1e-6: 34 solves,
+# residuals 1.3e-7)
+TOLERANCE = 1e-10
+# the most iterative-refinement steps of each PARDISO solve (``Pardiso.refinement``): none,
+# unless the factorisation perturbed pivots; None keeps MKL's default of two
+PARDISO_REFINEMENT: int | None = 0
+# OpenBLAS threads in the Lanczos iterations (threadpoolctl, where installed; None leaves
+# them): ARPACK's work is products of a tall (n, ncv) matrix and a vector, and with two
+# threads on two cores that another process shares it took 2.4 s instead of 0.3 s, the
+# SuperLU solves 0.08 s instead of 0.04 s (benchmarks/modes.py); MKL's threads (PARDISO)
+# are left alone
+LANCZOS_BLAS_THREADS: int | None = 1
 
 # int psi_a psi_b dA0 / A0 of the linear triangle, spread over the three components
 _CONSISTENT = np.kron((np.ones((3, 3)) + np.eye(3)) / 12.0, np.eye(3)).reshape(81)
@@ -107,6 +123,18 @@ def mass_matrix(
     raise ValueError(f"unknown mass '{kind}' (one of {', '.join(MASS_KINDS)})")
 
 
+def blas_threads(limit: int | None) -> contextlib.AbstractContextManager:
+    """A context in which OpenBLAS uses at most ``limit`` threads (threadpoolctl); nothing
+    for limit None or without threadpoolctl."""
+    if limit is None:
+        return contextlib.nullcontext()
+    try:
+        from threadpoolctl import threadpool_limits  # type: ignore[import-untyped, import-not-found, unused-ignore]
+    except ImportError:
+        return contextlib.nullcontext()
+    return threadpool_limits(limits={"libscipy_openblas": limit})  # NumPy's and SciPy's
+
+
 @dataclass(frozen=True)
 class Modes:
     """Natural modes of a state, lowest first (nearest the shift where one is given).
@@ -142,7 +170,8 @@ def solve_eigenproblem(
     eigenvalues (count,) ascending, the vectors (n, count) M-normalised and the shift used
     (default -SHIFT mean diag K / mean diag M).
 
-    Shift-invert with (K - sigma M)^-1 from one factorisation by ``linear_solver``; dense
+    Shift-invert with (K - sigma M)^-1 from one factorisation by ``linear_solver`` (ARPACK
+    at the tolerance TOLERANCE; PARDISO with PARDISO_REFINEMENT refinement steps); dense
     for at most DENSE_LIMIT unknowns or count >= n - 1. Shift-invert finds the eigenvalues
     nearest sigma, which are the lowest only if none lies below it: for a symmetric K the
     inertia of the same factorisation counts those below (Sylvester), and that many more
@@ -169,6 +198,8 @@ def solve_eigenproblem(
         values, vectors = values[nearest], vectors[:, nearest]
     else:
         linear = make_linear_solver(linear_solver, n)
+        if hasattr(linear, "refinement"):
+            linear.refinement = PARDISO_REFINEMENT
         try:
             shifted = (K - sigma * M).tocsr()
             shifted.sort_indices()
@@ -188,10 +219,11 @@ def solve_eigenproblem(
                     f"many to find the {count} lowest of {n} by shift-invert"
                 )
             inverse = spla.LinearOperator((n, n), matvec=solve, dtype=float)
-            if symmetric:
-                values, vectors = spla.eigsh(K, wanted, M, sigma=sigma, which="LM", OPinv=inverse)
-            else:
-                values, vectors = spla.eigs(K, wanted, M, sigma=sigma, which="LM", OPinv=inverse)
+            arpack = spla.eigsh if symmetric else spla.eigs
+            with blas_threads(LANCZOS_BLAS_THREADS):
+                values, vectors = arpack(
+                    K, wanted, M, sigma=sigma, which="LM", OPinv=inverse, tol=TOLERANCE
+                )
         finally:
             linear.release()
     if np.iscomplexobj(values):
