@@ -62,6 +62,8 @@ def test_strain_energy_and_work_of_a_homogeneous_stretch(tmp_path):
         errors.append(abs(last["external_work"] / U - 1.0))
     assert errors[0] > 1e-3  # the rule's error is seen, and falls at order 2
     np.testing.assert_allclose(np.log2(np.array(errors[:-1]) / errors[1:]), 2.0, atol=0.15)
+    history = last["residual_history"]  # from the solve's start to its last iterate
+    assert len(history) == last["iterations"] + 1 and history[-1] == last["residual"]
     assert last["areas"]["taut"] == pytest.approx(stretch**2 * 0.5, rel=1e-12)
     assert last["areas"]["wrinkled"] == last["areas"]["slack"] == 0.0
     # Cauchy N = F S F^T / J = S (equal biaxial), S = E t e / (1 - nu)

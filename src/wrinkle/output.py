@@ -20,7 +20,8 @@
 - ``results.pvd``: a ParaView collection of the converged steps, timestep = load factor.
 - ``summary.json``: {"converged", "message", "steps": [{"step", "file", "load_factor",
   "iterations", "residual", "states": {"taut", "wrinkled", "slack"}, "reactions":
-  {support label: [Fx, Fy, Fz]}, "max_displacement", "stopped_by" ("residual" or
+  {support label: [Fx, Fy, Fz]}, "max_displacement", "residual_history" (the residual
+  norm of each iteration of the step's solve), "stopped_by" ("residual" or
   "accuracy"), and for "accuracy" "accuracy_stop": {"residual" (relative to the force scale),
   "energy_gap", "discretisation_error", "contraction", "remaining_change": {quantity:
   value}} (``wrinkle.solvers.stopping``), and "pressure" where the model has pressure loads
@@ -264,6 +265,7 @@ class ResultWriter:
             "reactions": support_forces,
             "max_displacement": float(np.linalg.norm(u, axis=1).max(initial=0.0)),
             "stopped_by": getattr(step, "stopped_by", "residual"),
+            "residual_history": [float(r) for r in getattr(step, "residual_history", ())],
         }
         stop = getattr(step, "stop_report", None)
         if stop is not None:

@@ -33,7 +33,8 @@ class StepResult:
     (their value times the load factor, or times the pressure factor that volume control
     and gas loads solve for; None without pressure); enclosed_volume: the volume the
     pressurised membrane encloses (``DiscreteSystem.enclosed_volume``), where it is closed
-    or closed by symmetry planes, else None.
+    or closed by symmetry planes, else None; residual_history: the residual norm (force) of
+    each iteration of the step's converged solve, the first at its start.
     """
 
     load_factor: float
@@ -46,6 +47,7 @@ class StepResult:
     stop_report: dict[str, Any] | None = None
     pressure: float | None = None
     enclosed_volume: float | None = None
+    residual_history: tuple[float, ...] = ()
 
 
 class Results:
@@ -108,6 +110,7 @@ class Results:
             solved.stop_report,
             None if value is None else factor * value,
             system.enclosed_volume(u) if self._closed else None,
+            tuple(float(r) for r in solved.residual_norms),
         )
         self.steps.append(step)
         return step
