@@ -11,6 +11,7 @@ from wrinkle.materials import MooneyRivlin, NeoHookean, Ogden, Prestressed, StVe
 from wrinkle.mesh import Mesh, annulus, cylinder, disk, read_mesh, rectangle, sphere
 from wrinkle.model import Model
 from wrinkle.post import element_report, material_response
+from wrinkle.reader import ResultsFolder, open_results
 from wrinkle.refinement import refine, refined
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import select_nodes
@@ -35,6 +36,7 @@ __all__ = [
     "PointTransfer",
     "Prestressed",
     "Results",
+    "ResultsFolder",
     "SolverSettings",
     "StVenantKirchhoff",
     "StepResult",
@@ -45,6 +47,7 @@ __all__ = [
     "disk",
     "element_report",
     "material_response",
+    "open_results",
     "read_case",
     "read_mesh",
     "rectangle",

@@ -44,11 +44,13 @@ from wrinkle.mesh import (
 from wrinkle.model import Model
 from wrinkle.modes import DEFAULT_MASS, MASS_KINDS, Modes
 from wrinkle.output import ResultsWriteError, ResultWriter
+from wrinkle.reader import SUMMARY, open_results
 from wrinkle.refinement import MAX_REFINED_ELEMENTS, refine
 from wrinkle.results import Results, StepResult
 from wrinkle.selectors import evaluate_expression, select_nodes
 from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS, ConvergenceError, SolverSettings
 from wrinkle.solvers.settings import CONTROLS, CONVERGENCE_TESTS
+from wrinkle.solvers.stepping import Resume
 
 FORM_MESH = "formfound.msh"  # the found mesh, in the output folder of a [formfinding] case
 
@@ -353,6 +355,7 @@ class Case:
         out: str | os.PathLike,
         on_step: Callable[[StepResult], None] | None = None,
         loads: bool = True,
+        restart: bool = False,
         **options: Any,
     ) -> Results:
         """Solve and write each converged step into the folder ``out`` as it converges
@@ -368,9 +371,13 @@ class Case:
         model made again on it (``rebuild``: the supports hold the found boundary, the
         prestress kept) is solved under the case's loads, or without them in one step if
         ``loads`` is False (``wrinkle formfind``); the summary has "formfinding".
-        FormFindingError if no form is found."""
+        FormFindingError if no form is found.
+
+        With ``restart`` (``wrinkle run --restart``) the path continues from the last
+        converged step in ``out`` (``resume_from``), as the run would have gone on, and the
+        new steps are added to those there; from the start where ``out`` has none."""
         if self.form_finding is None:
-            return self._run(out, on_step, None, **options)
+            return self._run(out, on_step, None, restart, **options)
         form = self.find_form()
         assert self.rebuild is not None
         try:
@@ -393,7 +400,53 @@ class Case:
         }
         if not loads:  # the found form alone: one step, at which it balances
             options = {"steps": 1, "control": "load", **options}
-        return analysis._run(out, on_step, summary, **options)
+        return analysis._run(out, on_step, summary, restart, **options)
+
+    def resume_from(self, out: str | os.PathLike, **options: Any) -> Resume | None:
+        """Where the path continues from the results in the folder ``out``: its last
+        converged step, the one before it and the increment the step controller (with the
+        case's settings and ``options``) takes next, so that the run goes on as it would
+        have (``wrinkle.solvers.stepping.Resume``); None if ``out`` has no converged step.
+        CaseError if that run reached load factor 1 already, or its mesh is not the case's."""
+        folder = Path(out)
+        if not (folder / SUMMARY).is_file():
+            return None
+        settings = self.settings.replace(**options)
+        if settings.control != "load" or settings.stop is not None or self.model.gas is not None:
+            raise CaseError(
+                f"--restart: {self.source}: only a load-controlled path without a stop or gas "
+                "load can be continued (solver control = 'load')"
+            )
+        try:
+            saved = open_results(folder)
+            if not saved.steps:
+                return None
+            last = saved.steps[-1]
+            factor = float(last["load_factor"])
+            if factor >= 1.0 - 1e-12:
+                raise CaseError(
+                    f"--restart: {folder / SUMMARY}: that run reached load factor 1: "
+                    "nothing to continue"
+                )
+            u = saved.displacement(-1)
+            if u.size != self.model.n_dofs:
+                raise CaseError(
+                    f"--restart: {folder / last['file']}: a mesh of {u.size // 3} nodes, not "
+                    f"the case's {self.model.mesh.n_nodes}"
+                )
+            if len(saved.steps) > 1:
+                previous = (float(saved.steps[-2]["load_factor"]), saved.displacement(-2))
+            else:
+                previous = (0.0, np.zeros(self.model.n_dofs))
+        except (OSError, KeyError, TypeError) as error:
+            raise CaseError(f"--restart: {folder}: not readable ({error})") from None
+        except ValueError as error:
+            if isinstance(error, CaseError):
+                raise
+            raise CaseError(f"--restart: {error}") from None
+        controller = settings.controller()
+        increment = controller.after_success(factor - previous[0], int(last["iterations"]))
+        return Resume(factor, u, previous, increment)
 
     def find_form(self) -> FormFinding:
         """The form of the case's model by its [formfinding] settings (default ones
@@ -417,11 +470,23 @@ class Case:
         out: str | os.PathLike,
         on_step: Callable[[StepResult], None] | None,
         form_finding: dict | None,
+        restart: bool = False,
         **options: Any,
     ) -> Results:
-        writer = ResultWriter(
-            out, self.model, probes=self.probes, units=self.units, case=self.source
-        )
+        resume = self.resume_from(out, **options) if restart else None
+        try:
+            writer = ResultWriter(
+                out,
+                self.model,
+                probes=self.probes,
+                units=self.units,
+                case=self.source,
+                resume=resume is not None,
+            )
+        except ValueError as error:  # a folder of another case's run
+            raise CaseError(f"--restart: {error}") from None
+        if resume is not None:
+            options["resume"] = resume
         writer.form_finding = form_finding
 
         def write(step: StepResult) -> None:

@@ -1,8 +1,10 @@
-"""Command line: ``wrinkle run CASE [--out DIR] [-q]``, ``wrinkle formfind CASE [--out DIR]
-[-q]``, ``wrinkle plot DIR``, ``wrinkle --version`` (also ``python -m wrinkle ...``).
+"""Command line: ``wrinkle run CASE [--out DIR] [--restart] [-q]``, ``wrinkle formfind
+CASE [--out DIR] [-q]``, ``wrinkle plot DIR``, ``wrinkle --version`` (also ``python -m
+wrinkle ...``).
 
 ``run`` solves a TOML case file and writes each converged step into DIR as it converges
-(``wrinkle.case.Case.run``; with a [formfinding] table it form-finds first); ``formfind``
+(``wrinkle.case.Case.run``; with a [formfinding] table it form-finds first; ``--restart``
+continues from the last converged step in DIR); ``formfind``
 form-finds the case (its [formfinding] table, or the defaults) without its loads and writes
 the found form into DIR, with ``formfound.msh``; ``plot`` draws the pictures of such a
 directory (``wrinkle.plot.plot_results``); ``-v`` before the command logs every iteration.
@@ -19,6 +21,7 @@ live in the repository (``python examples/paper_test.py``, ``python -m verificat
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
 import sys
 import warnings
@@ -37,6 +40,7 @@ def _run(args: argparse.Namespace) -> int:
     from wrinkle.formfinding import FormFindingError
     from wrinkle.output import ResultsWriteError
     from wrinkle.progress import Progress
+    from wrinkle.reader import SUMMARY, open_results
 
     case = read_case(args.case)
     form_only = args.command == "formfind"
@@ -47,8 +51,12 @@ def _run(args: argparse.Namespace) -> int:
         raise ValueError(f"--out {out}: is a file, not a folder for the results")
     progress = Progress(quiet=args.quiet)
     try:
+        restart = getattr(args, "restart", False)
+        if restart and (out / SUMMARY).is_file():  # number the new steps after the old
+            with contextlib.suppress(ValueError):
+                progress.count = len(open_results(out))
         with listening(progress.iteration):
-            case.run(args.out, on_step=progress.step, loads=not form_only)
+            case.run(args.out, on_step=progress.step, loads=not form_only, restart=restart)
     except (FormFindingError, NoModesError) as error:
         progress.close()
         print(f"wrinkle: {error}", file=sys.stderr)
@@ -101,6 +109,11 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("case", help="case file (TOML)")
     run.add_argument("--out", default="results", help="output directory")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress display")
+    run.add_argument(
+        "--restart",
+        action="store_true",
+        help="continue from the last converged step in the output directory",
+    )
     run.set_defaults(run=_run)
     formfind = sub.add_parser(
         "formfind", help="form-find a case file's prestressed membrane (without its loads)"

@@ -53,7 +53,7 @@ from wrinkle.solvers.control import (
     follow_volume_path,
 )
 from wrinkle.solvers.settings import ARC_LENGTH_STEPS, SolverSettings
-from wrinkle.solvers.stepping import follow_load_path
+from wrinkle.solvers.stepping import Resume, follow_load_path
 from wrinkle.system import DiscreteSystem, FollowerEdgeLoad, Loading
 from wrinkle.wrinkling import Wrinkling
 
@@ -643,6 +643,7 @@ class Model:
         results: Results,
         first_guess: NestedStart | None,
         probes: Mapping[str, np.ndarray] | None,
+        resume: Resume | None = None,
     ) -> PathEnd:
         """Follow the path ``settings.control`` names (``solve``), with the stop, a gas
         load's law; returns how it ended. ValueError for a control or stop the model cannot
@@ -656,6 +657,11 @@ class Model:
             stop = ProbeDisplacement(np.asarray(probes[name]), float(displacement))
         timer, controller = results.stopwatch, settings.controller()
         control = settings.control
+        if resume is not None and (control != "load" or stop is not None or self.gas is not None):
+            raise ValueError(
+                "restart: only a load-controlled path without a stop or gas load can be "
+                "continued (solver control = 'load')"
+            )
         if self.gas is not None or control == "volume":
             what = "[[load]] kind = 'gas'" if self.gas is not None else "solver control = 'volume'"
             if self.gas is not None and control != "load":
@@ -701,7 +707,16 @@ class Model:
             return follow_load_path_to(
                 system, solver, controller, stop, record, u0, timer, **options
             )
-        follow_load_path(system, solver, controller, u0=u0, on_step=record, timer=timer, **options)
+        follow_load_path(
+            system,
+            solver,
+            controller,
+            u0=u0,
+            on_step=record,
+            timer=timer,
+            resume=resume,
+            **options,
+        )
         return PathEnd("converged to load factor 1")
 
     def _volume_constraints(
@@ -763,6 +778,7 @@ class Model:
         on_step: Callable[[StepResult], None] | None = None,
         coarse: Sequence[Model] | None = None,
         probes: Mapping[str, np.ndarray] | None = None,
+        resume: Resume | None = None,
         **options: Any,
     ) -> Results:
         """Proportional stepping of loads and prescribed displacements from 0 to 1.
@@ -782,7 +798,9 @@ class Model:
         reference state only (u0 None). probes:
         {name: node indices} watched, with every displacement and the reactions, by the
         accuracy stop (``convergence="accuracy"``) on the finer levels of a nested first
-        step. Raises
+        step. resume: continue the path from its last converged state instead
+        (``wrinkle.solvers.stepping.Resume``, load control only; the results hold the new
+        steps). Raises
         ConvergenceError, with the converged steps in its ``results`` attribute, if a step
         cannot be solved; ValueError for a bad setting, unrestrained rigid-body motion or a
         coarse model not coarser than the next or off its surface.
@@ -803,7 +821,7 @@ class Model:
         system.check_resolvable()
         results = Results(self)
         first_guess = None
-        if coarse and settings.nested is not False and u0 is None:
+        if coarse and settings.nested is not False and u0 is None and resume is None:
             first_guess = NestedStart(coarse, self, settings, results.stopwatch, probes)
 
         pressure_unknown = self.gas is not None or settings.control == "volume"
@@ -818,7 +836,7 @@ class Model:
         solver = settings.solver()
         try:
             results.end = self._follow(
-                system, settings, solver, u0, record, results, first_guess, probes
+                system, settings, solver, u0, record, results, first_guess, probes, resume
             )
         except ConvergenceError as error:
             error.results = results

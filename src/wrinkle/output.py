@@ -80,6 +80,7 @@ from wrinkle.post import (
     support_moments,
     support_reactions,
 )
+from wrinkle.reader import HISTORY, SUMMARY, open_results
 from wrinkle.wrinkling import STATE_NAMES
 
 __all__ = [
@@ -94,8 +95,6 @@ __all__ = [
     "step_file_name",
 ]
 
-SUMMARY = "summary.json"
-HISTORY = "history.csv"
 # the pictures `wrinkle plot` draws into a results folder (wrinkle.plot), removed with the old
 # steps when a new run starts there
 STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE = (
@@ -180,6 +179,7 @@ class ResultWriter:
         probes: Mapping[str, np.ndarray] | None = None,
         units: Mapping[str, str] | None = None,
         case: str | os.PathLike | None = None,
+        resume: bool = False,
     ):
         self._start = time.perf_counter()
         self.out_dir = Path(out_dir)
@@ -223,9 +223,14 @@ class ResultWriter:
             system.reference_volume if system is not None and self.has_volume else None
         )
         self.out_dir.mkdir(parents=True, exist_ok=True)
+        kept: set[str] = set()
+        if resume:
+            kept = self._resume()
         pictures = {STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE}
         pictures.add(MODE_COLLECTION)
         for old in self.out_dir.iterdir():
+            if old.name in kept:
+                continue
             if (
                 STEP_FILE.fullmatch(old.name)
                 or MODE_FILE.fullmatch(old.name)
@@ -235,6 +240,37 @@ class ResultWriter:
         self._write_collection()
         self._write_history()
         self._write_summary(False, "running")
+
+    def _resume(self) -> set[str]:
+        """Take up the steps already in the folder (``wrinkle run --restart``): the summary's
+        steps, the history's rows, the work and the state of the last step. Returns the
+        names of the step files kept. ValueError naming the file if the folder's history
+        has other columns than this model's or its last step another mesh."""
+        folder = open_results(self.out_dir)
+        self.steps = [dict(step) for step in folder.summary["steps"]]
+        self.form_finding = folder.summary.get("formfinding")
+        header = self.history_header()
+        path = self.out_dir / HISTORY
+        with open(path, newline="", encoding="utf-8") as handle:
+            rows = list(csv.reader(handle))
+        if not rows or rows[0] != header or len(rows) - 1 != len(self.steps):
+            raise ValueError(
+                f"{path}: its columns or rows are not those of this case's run "
+                f"({len(self.steps)} steps, columns {', '.join(header)})"
+            )
+        self.rows = rows[1:]
+        if self.steps:
+            u = folder.displacement(-1)
+            if u.shape != self._last_displacement.shape:
+                raise ValueError(
+                    f"{self.out_dir / self.steps[-1]['file']}: a mesh of {u.size // 3} nodes, "
+                    f"not the case's {self._last_displacement.size // 3}"
+                )
+            self._last_displacement = u
+            self._work = float(self.steps[-1].get("external_work", 0.0))
+            if self.system is not None:
+                self._last_forces = self.system.strain_energy_and_forces(u)[1]
+        return {str(step["file"]) for step in self.steps}
 
     # -- per step -----------------------------------------------------------------------
     def write_step(self, step) -> Path:

@@ -40,6 +40,7 @@ __all__ = [
     "LIMIT_SLOPE",
     "LoadLevels",
     "PathSlope",
+    "Resume",
     "StepController",
     "SteppedProblem",
     "descend",
@@ -295,8 +296,8 @@ class PathSlope:
     below LIMIT_SLOPE and JUMP times below the step before's has jumped across one to
     another branch (``jump``)."""
 
-    def __init__(self, u0: np.ndarray):
-        self._factor, self._u = 0.0, u0
+    def __init__(self, u0: np.ndarray, factor: float = 0.0):
+        self._factor, self._u = factor, u0
         self.relative: list[float] = []  # each converged step's slope over the first's
         self._first: float | None = None
 
@@ -414,6 +415,19 @@ def _limit_point_error(
     return failure
 
 
+@dataclass(frozen=True)
+class Resume:
+    """Where a load path continues (``wrinkle run --restart``): the last converged state
+    (load factor ``factor``, displacements ``u`` (n_dofs,)), the converged state before it
+    (``previous``: load factor and displacements; (0, u at load factor 0) after the first
+    step), and the increment the path takes next."""
+
+    factor: float
+    u: np.ndarray
+    previous: tuple[float, np.ndarray]
+    increment: float
+
+
 def follow_load_path(
     system: LoadLevels,
     solver: RegularisedSolver,
@@ -425,6 +439,7 @@ def follow_load_path(
     first_stop: FirstStop | None = None,
     describe_load: Callable[[float], str] | None = None,
     stability: bool = False,
+    resume: Resume | None = None,
 ) -> np.ndarray:
     """Load control from load factor 0 to 1: increments from ``controller``, each step
     solved by ``solve_step`` from the extrapolation of the last two converged states (u0, or
@@ -442,7 +457,9 @@ def follow_load_path(
     that start (``wrinkle.solvers.stopping``), or None; describe_load(load_factor): the loads
     at a load factor in words (such as "pressure 4958"), for the message of a limit point;
     stability: check that each converged state is stable (``wrinkle.solvers.stability``, one
-    factorisation a step), and end the path at the first that is not.
+    factorisation a step), and end the path at the first that is not. resume: continue a
+    path from its last converged state (``Resume``) as it would have gone on: the same
+    increments and extrapolations, so the same steps (u0 and first_guess are then unused).
     Returns the displacements at load factor 1. Raises ConvergenceError, with ``reached``
     (the last converged load factor) set, when a step fails at the smallest increment; where
     the load-displacement slope had fallen to a limit point of the load there
@@ -456,6 +473,12 @@ def follow_load_path(
     factor = 0.0
     previous: tuple[float, np.ndarray] | None = None  # the converged state before the last
     looked_ahead = not controller.look_ahead
+    if resume is not None:
+        factor, u = resume.factor, np.array(resume.u, dtype=float)
+        previous, increment = resume.previous, resume.increment
+        slope = PathSlope(previous[1], previous[0])
+        slope.record(factor, u)
+        looked_ahead = True
     while factor < 1.0 - _END:
         trial_factor = min(1.0, factor + increment)
         problem = _problem_at(system, trial_factor, timer)
