@@ -43,7 +43,7 @@ from wrinkle.mesh import (
 )
 from wrinkle.model import Model
 from wrinkle.modes import DEFAULT_MASS, MASS_KINDS, Modes
-from wrinkle.output import ResultsWriteError, ResultWriter
+from wrinkle.output import FIELDS, FORMATS, ResultsWriteError, ResultWriter
 from wrinkle.reader import SUMMARY, open_results
 from wrinkle.refinement import MAX_REFINED_ELEMENTS, refine
 from wrinkle.results import Results, StepResult
@@ -51,6 +51,7 @@ from wrinkle.selectors import evaluate_expression, select_nodes
 from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS, ConvergenceError, SolverSettings
 from wrinkle.solvers.settings import CONTROLS, CONVERGENCE_TESTS
 from wrinkle.solvers.stepping import Resume
+from wrinkle.xdmf import require_h5py
 
 FORM_MESH = "formfound.msh"  # the found mesh, in the output folder of a [formfinding] case
 
@@ -279,6 +280,16 @@ class ModeSettings:
 
 
 @dataclass(frozen=True)
+class OutputSettings:
+    """The [output] table: the step files' format ("vtu", one file a step with its mesh;
+    "xdmf", an XDMF time series with the mesh written once, ``wrinkle.xdmf``) and the fields
+    they hold (None: all; "displacement" is always written)."""
+
+    file_format: str = "vtu"
+    fields: tuple[str, ...] | None = None
+
+
+@dataclass(frozen=True)
 class FormFindingSettings:
     """The [formfinding] table: ``find_form``'s tolerance (the largest change of the shape
     in an iteration, relative to its size) and its most outer iterations."""
@@ -319,6 +330,7 @@ class Case:
     form_finding: FormFindingSettings | None = None
     rebuild: Callable[[Mesh, bool], Model] | None = None
     selections: dict[str, np.ndarray] = field(default_factory=dict)
+    output: OutputSettings = field(default_factory=OutputSettings)
 
     def _label(self, results: Results | None) -> None:
         if results is not None:
@@ -482,6 +494,8 @@ class Case:
                 units=self.units,
                 case=self.source,
                 resume=resume is not None,
+                file_format=self.output.file_format,
+                fields=self.output.fields,
             )
         except ValueError as error:  # a folder of another case's run
             raise CaseError(f"--restart: {error}") from None
@@ -544,6 +558,7 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
             "verification",
             "modes",
             "formfinding",
+            "output",
         },
     )
 
@@ -659,6 +674,7 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
         form_finding,
         rebuild,
         selections,
+        _read_output(reader, data["output"]) if "output" in data else OutputSettings(),
     )
 
 
@@ -1001,6 +1017,32 @@ def _read_form_finding(reader: _Reader, table: dict) -> FormFindingSettings:
         count = int(reader.number(table, "max_iterations", where, integer=True, minimum=1))
         settings = replace(settings, max_iterations=count)
     return settings
+
+
+def _read_output(reader: _Reader, table: dict) -> OutputSettings:
+    """The [output] table: format ("vtu" or "xdmf"), fields (a list of field names)."""
+    where = "[output]"
+    if not isinstance(table, dict):
+        reader.fail(where, "must be a table")
+    reader.keys(table, where, set(), {"format", "fields"})
+    file_format = reader.choice(table, "format", where, FORMATS) if "format" in table else "vtu"
+    fields = None
+    if "fields" in table:
+        names = table["fields"]
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            reader.fail(where, f"'fields' must be a list of field names, got {names!r}")
+        unknown = [name for name in names if name not in FIELDS]
+        if unknown:
+            reader.fail(
+                where, f"'fields': unknown field {unknown[0]!r} (fields: {', '.join(FIELDS)})"
+            )
+        fields = tuple(names)
+    if file_format == "xdmf":
+        try:
+            require_h5py()
+        except ImportError as error:
+            reader.fail(where, str(error))
+    return OutputSettings(file_format, fields)
 
 
 def _read_modes(reader: _Reader, table: dict, model: Model) -> ModeSettings:

@@ -79,7 +79,8 @@ def _run(args: argparse.Namespace) -> int:
         return 1
     if not args.quiet:
         found = f", {FORM_MESH}" if case.form_finding is not None else ""
-        print(f"wrote {args.out}/results.pvd, summary.json, history.csv{found}")
+        collection = "results.xdmf" if case.output.file_format == "xdmf" else "results.pvd"
+        print(f"wrote {args.out}/{collection}, summary.json, history.csv{found}")
     return 0
 
 

@@ -18,6 +18,10 @@
   ``displacement`` (scale factor 1) to see the deformed membrane; colour by ``state`` and
   add "Glyph" on ``tension_direction`` for the tension field.
 - ``results.pvd``: a ParaView collection of the converged steps, timestep = load factor.
+- with ``file_format="xdmf"`` (``[output] format``) instead of the .vtu files and
+  results.pvd: ``mesh.h5`` once, ``step_0001.h5``, ... and ``results.xdmf``
+  (``wrinkle.xdmf``), the same fields; ``fields`` chooses the fields of either format
+  (``FIELDS``; "displacement" always).
 - ``summary.json``: {"converged", "message", "steps": [{"step", "file", "load_factor",
   "iterations", "residual", "states": {"taut", "wrinkled", "slack"}, "reactions":
   {support label: [Fx, Fy, Fz]}, "max_displacement", "residual_history" (the residual
@@ -63,7 +67,7 @@ import os
 import re
 import secrets
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from pathlib import Path
 from types import ModuleType
@@ -82,6 +86,16 @@ from wrinkle.post import (
 )
 from wrinkle.reader import HISTORY, SUMMARY, open_results
 from wrinkle.wrinkling import STATE_NAMES
+from wrinkle.xdmf import COLLECTION as XDMF_COLLECTION
+from wrinkle.xdmf import (
+    MESH_FILE,
+    layout,
+    read_layout,
+    require_h5py,
+    write_collection,
+    write_mesh_file,
+    write_step_file,
+)
 
 __all__ = [
     "COLLECTION",
@@ -105,13 +119,32 @@ STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE = (
 )
 COLLECTION = "results.pvd"
 MODE_COLLECTION = "modes.pvd"
-STEP_FILE = re.compile(r"step_\d{4,}\.vtu")
+STEP_FILE = re.compile(r"step_\d{4,}\.(vtu|h5)")
+FORMATS = ("vtu", "xdmf")  # [output] format
+# the fields a step file may hold ([output] fields); "displacement" is always written
+POINT_FIELDS = ("displacement", "reaction", "stress_nodal")
+CELL_FIELDS = (
+    "state",
+    "tension_direction",
+    "wrinkle_direction",
+    "principal_stress",
+    "principal_stress_major",
+    "principal_stress_minor",
+    "stress",
+    "strain",
+    "fibre_direction",
+    "wrinkling_strain",
+    "thickness",
+)
+CABLE_FIELDS = ("cable_force", "cable_taut")  # on the cables' line cells, .vtu only
+FIELDS = (*POINT_FIELDS, *CELL_FIELDS, *CABLE_FIELDS)
 MODE_FILE = re.compile(r"mode_\d{2,}\.vtu")
 
 
-def step_file_name(index: int) -> str:
-    """File name of the ``index``-th converged step (1-based): step_0001.vtu, ..."""
-    return f"step_{index:04d}.vtu"
+def step_file_name(index: int, file_format: str = "vtu") -> str:
+    """File name of the ``index``-th converged step (1-based): step_0001.vtu, ... (.h5 for
+    the xdmf format)."""
+    return f"step_{index:04d}.{'h5' if file_format == 'xdmf' else 'vtu'}"
 
 
 class ResultsWriteError(OSError):
@@ -180,8 +213,20 @@ class ResultWriter:
         units: Mapping[str, str] | None = None,
         case: str | os.PathLike | None = None,
         resume: bool = False,
+        file_format: str = "vtu",
+        fields: Sequence[str] | None = None,
     ):
         self._start = time.perf_counter()
+        if file_format not in FORMATS:
+            raise ValueError(f"output format {file_format!r}: one of {', '.join(FORMATS)}")
+        unknown = sorted(set(fields or ()) - set(FIELDS))
+        if unknown:
+            raise ValueError(f"output field {unknown[0]!r} unknown (fields: {', '.join(FIELDS)})")
+        if file_format == "xdmf":
+            require_h5py()
+        self.file_format = file_format
+        self.fields = None if fields is None else frozenset(fields)
+        self._layouts: list[list] = []  # each xdmf step's fields (names, shapes, types)
         self.out_dir = Path(out_dir)
         self.model = model
         n_nodes = model.mesh.n_nodes
@@ -228,6 +273,18 @@ class ResultWriter:
             kept = self._resume()
         pictures = {STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE}
         pictures.add(MODE_COLLECTION)
+        # the other format's collection would show an old run
+        pictures.add(COLLECTION if file_format == "xdmf" else XDMF_COLLECTION)
+        if file_format == "xdmf":
+            mesh = model.mesh
+            if not (resume and (self.out_dir / MESH_FILE).is_file()):
+                atomic_write(
+                    self.out_dir / MESH_FILE,
+                    partial(write_mesh_file, nodes=mesh.nodes, triangles=mesh.triangles),
+                )
+            kept.add(MESH_FILE)
+        else:
+            pictures.add(MESH_FILE)
         for old in self.out_dir.iterdir():
             if old.name in kept:
                 continue
@@ -270,6 +327,8 @@ class ResultWriter:
             self._work = float(self.steps[-1].get("external_work", 0.0))
             if self.system is not None:
                 self._last_forces = self.system.strain_energy_and_forces(u)[1]
+        if self.file_format == "xdmf":
+            self._layouts = [read_layout(self.out_dir / str(s["file"])) for s in self.steps]
         return {str(step["file"]) for step in self.steps}
 
     # -- per step -----------------------------------------------------------------------
@@ -277,11 +336,11 @@ class ResultWriter:
         """Write one converged ``StepResult``: its .vtu, then the collection, the history and
         the summary ("running"). Returns the path of the .vtu."""
         index = len(self.steps) + 1
-        name = step_file_name(index)
+        name = step_file_name(index, self.file_format)
         path = self.out_dir / name
         displacement = np.asarray(step.displacement, dtype=float)
         report = element_report(self.model, displacement)
-        self._write_vtu(path, step, report)
+        self._write_step_file(path, step, report)
         u = displacement.reshape(-1, 3)
         reactions = np.asarray(step.reactions, dtype=float)
         support_forces = support_reactions(self.supports, reactions)
@@ -427,50 +486,87 @@ class ResultWriter:
         return self._write_summary(bool(converged), str(message))
 
     # -- files --------------------------------------------------------------------------
-    def _write_vtu(self, path: Path, step, report: ElementReport) -> None:
+    def _fields(self, step, report: ElementReport) -> tuple[dict, dict]:
+        """The step's point data (n_nodes, ...) and the triangles' cell data (n_elements,
+        ...) by name: those of ``fields`` (all when it is None), "displacement" always."""
+        mesh = self.model.mesh
+        point_data = {
+            "displacement": lambda: np.asarray(step.displacement, dtype=float).reshape(-1, 3),
+            "reaction": lambda: np.asarray(step.reactions, dtype=float).reshape(-1, 3),
+            "stress_nodal": lambda: nodal_average(
+                mesh.triangles, report.cauchy_stress, report.area
+            ).reshape(-1, 9),
+        }
+        cell_data = {
+            "state": lambda: report.state.astype(np.int32),
+            "tension_direction": lambda: report.tension_direction,
+            "wrinkle_direction": lambda: report.wrinkle_direction,
+            "principal_stress": lambda: report.principal_stress,
+            "principal_stress_major": lambda: report.principal_stress[:, 1].copy(),
+            "principal_stress_minor": lambda: report.principal_stress[:, 0].copy(),
+            "stress": lambda: report.cauchy_stress.reshape(-1, 9),
+            "strain": lambda: report.strain.reshape(-1, 9),
+            "fibre_direction": lambda: report.fibre_direction,
+            "wrinkling_strain": lambda: report.wrinkling_strain,
+            "thickness": lambda: report.thickness,
+        }
+        chosen = self.fields
+
+        def wanted(name: str) -> bool:
+            return chosen is None or name in chosen or name == "displacement"
+
+        return (
+            {name: make() for name, make in point_data.items() if wanted(name)},
+            {
+                name: np.ascontiguousarray(make())
+                for name, make in cell_data.items()
+                if wanted(name)
+            },
+        )
+
+    def _write_step_file(self, path: Path, step, report: ElementReport) -> None:
+        """The step's fields as ``path`` (step_NNNN.vtu, or step_NNNN.h5 for xdmf)."""
+        point_data, cell_data = self._fields(step, report)
+        if self.file_format == "xdmf":
+            atomic_write(path, partial(write_step_file, point_data=point_data, cell_data=cell_data))
+            self._layouts.append(layout(point_data, cell_data))
+            return
         meshio = require_meshio()
         mesh = self.model.mesh
-        cell_data = {
-            "state": report.state.astype(np.int32),
-            "tension_direction": report.tension_direction,
-            "wrinkle_direction": report.wrinkle_direction,
-            "principal_stress": report.principal_stress,
-            "principal_stress_major": report.principal_stress[:, 1].copy(),
-            "principal_stress_minor": report.principal_stress[:, 0].copy(),
-            "stress": report.cauchy_stress.reshape(-1, 9),
-            "strain": report.strain.reshape(-1, 9),
-            "fibre_direction": report.fibre_direction,
-            "wrinkling_strain": report.wrinkling_strain,
-            "thickness": report.thickness,
-        }
         cells = [("triangle", mesh.triangles)]
-        blocks = {key: [np.ascontiguousarray(value)] for key, value in cell_data.items()}
+        blocks = {key: [value] for key, value in cell_data.items()}
         cables = self.cable_state(step)
+        chosen = self.fields
         if cables is not None and self.system is not None and self.system.cables is not None:
             segments = self.system.cables.edges  # as line cells, after the triangles
             cells.append(("line", segments))
             for key, value in cell_data.items():
                 blocks[key].append(np.zeros((len(segments), *np.shape(value)[1:])))
-            blocks["cable_force"] = [np.zeros(mesh.n_elements), cables.axial]
-            blocks["cable_taut"] = [
-                np.zeros(mesh.n_elements, np.int32),
-                cables.taut.astype(np.int32),
-            ]
-        vtu = meshio.Mesh(
-            mesh.nodes,
-            cells,
-            point_data={
-                "displacement": np.asarray(step.displacement, dtype=float).reshape(-1, 3),
-                "reaction": np.asarray(step.reactions, dtype=float).reshape(-1, 3),
-                "stress_nodal": nodal_average(
-                    mesh.triangles, report.cauchy_stress, report.area
-                ).reshape(-1, 9),
-            },
-            cell_data=blocks,
-        )
+            if chosen is None or "cable_force" in chosen:
+                blocks["cable_force"] = [np.zeros(mesh.n_elements), cables.axial]
+            if chosen is None or "cable_taut" in chosen:
+                blocks["cable_taut"] = [
+                    np.zeros(mesh.n_elements, np.int32),
+                    cables.taut.astype(np.int32),
+                ]
+        vtu = meshio.Mesh(mesh.nodes, cells, point_data=point_data, cell_data=blocks)
         atomic_write(path, lambda temporary: meshio.write(temporary, vtu, file_format="vtu"))
 
     def _write_collection(self) -> None:
+        if self.file_format == "xdmf":
+            mesh = self.model.mesh
+            steps = [
+                (float(entry["load_factor"]), str(entry["file"]), fields)
+                for entry, fields in zip(self.steps, self._layouts, strict=True)
+            ]
+            write_collection(
+                self.out_dir / XDMF_COLLECTION,
+                mesh.n_nodes,
+                mesh.n_elements,
+                steps,
+                _write_text,
+            )
+            return
         self._write_pvd(
             COLLECTION,
             [
@@ -551,14 +647,25 @@ def save_results(
     probes: Mapping[str, np.ndarray] | None = None,
     units: Mapping[str, str] | None = None,
     case: str | os.PathLike | None = None,
+    file_format: str = "vtu",
+    fields: Sequence[str] | None = None,
 ) -> Path:
-    """Write every step of a finished ``Results`` into ``out_dir`` (files as ``ResultWriter``).
+    """Write every step of a finished ``Results`` into ``out_dir`` (files as ``ResultWriter``,
+    in ``file_format`` with ``fields``).
 
     The summary says converged if the last step reached load factor 1, otherwise where it
     stopped (e.g. the partial ``results`` of a ConvergenceError); its wall time is the writing
     time. Returns ``out_dir`` as a Path.
     """
-    writer = ResultWriter(out_dir, results.model, probes=probes, units=units, case=case)
+    writer = ResultWriter(
+        out_dir,
+        results.model,
+        probes=probes,
+        units=units,
+        case=case,
+        file_format=file_format,
+        fields=fields,
+    )
     for step in results.steps:
         writer.write_step(step)
     end = getattr(results, "end", None)

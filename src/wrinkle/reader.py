@@ -1,7 +1,8 @@
 """Reading a results folder back: ``open_results(DIR)`` (issue 22, item 5).
 
 A folder written by ``wrinkle run`` (``wrinkle.output.ResultWriter``) holds summary.json,
-history.csv and one step_NNNN.vtu per converged step. ``open_results`` gives them back as
+history.csv and one step_NNNN.vtu per converged step (step_NNNN.h5 with mesh.h5 and
+results.xdmf for ``[output] format = "xdmf"``). ``open_results`` gives them back as
 arrays: the summary (a dict), the history (column name -> (n_steps,) array), each step's
 load factor and, read from its .vtu when asked, its point and cell data; the mesh in the
 reference configuration. It is also what ``wrinkle run --restart`` reads its last step from.
@@ -23,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from wrinkle.mesh import Mesh, meshio_read
+from wrinkle.xdmf import read_step
 
 __all__ = ["ResultsFolder", "open_results", "read_summary"]
 
@@ -95,34 +97,42 @@ class ResultsFolder:
         """(n_steps,) the load factor of each converged step."""
         return np.array([float(step["load_factor"]) for step in self.steps])
 
-    def _vtu(self, step: int):
+    def _read(self, step: int) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """(nodes, triangles, fields) of a step's file, .vtu or the xdmf format's .h5; the
+        last step read is kept (one at a time: a 10^6-element step is large)."""
         if not self.steps:
             raise ValueError(f"{self.directory / SUMMARY}: no converged step")
         index = range(len(self.steps))[step]  # IndexError for a step out of range
         if index not in self._cache:
-            path = self.directory / str(self.steps[index]["file"])
-            self._cache.clear()  # one step's arrays at a time: a 10^6-element step is large
-            self._cache[index] = meshio_read(path, f"{path}")
+            name = str(self.steps[index]["file"])
+            self._cache.clear()
+            if name.endswith(".h5"):
+                nodes, triangles, point, cell = read_step(self.directory, name)
+                self._cache[index] = (nodes, triangles, {**point, **cell})
+            else:
+                path = self.directory / name
+                data = meshio_read(path, f"{path}")
+                fields = {key: np.asarray(value) for key, value in data.point_data.items()}
+                kinds = [block.type for block in data.cells]
+                for key, blocks in data.cell_data.items():
+                    for kind, values in zip(kinds, blocks, strict=True):
+                        if kind == "triangle":
+                            fields[key] = np.asarray(values)
+                triangles = data.get_cells_type("triangle")
+                self._cache[index] = (np.asarray(data.points, dtype=float), triangles, fields)
         return self._cache[index]
 
     def mesh(self, step: int = -1) -> Mesh:
-        """The mesh (reference configuration) of a step's .vtu: nodes (n_nodes, 3) and the
+        """The mesh (reference configuration) of a step's file: nodes (n_nodes, 3) and the
         triangles (n_elements, 3)."""
-        data = self._vtu(step)
-        return Mesh(np.asarray(data.points, dtype=float), data.get_cells_type("triangle"))
+        nodes, triangles, _ = self._read(step)
+        return Mesh(nodes, triangles)
 
     def fields(self, step: int = -1) -> dict[str, np.ndarray]:
         """A step's point data (n_nodes, ...) and cell data of its triangles (n_elements,
         ...) by name ("displacement", "reaction", "stress_nodal", "state", "stress", ...:
-        the .vtu fields of docs/case-file.md)."""
-        data = self._vtu(step)
-        out = {name: np.asarray(value) for name, value in data.point_data.items()}
-        kinds = [block.type for block in data.cells]
-        for name, blocks in data.cell_data.items():
-            for kind, values in zip(kinds, blocks, strict=True):
-                if kind == "triangle":
-                    out[name] = np.asarray(values)
-        return out
+        the fields of docs/case-file.md), from its .vtu or .h5 file."""
+        return dict(self._read(step)[2])
 
     def displacement(self, step: int = -1) -> np.ndarray:
         """A step's displacements, (n_nodes * 3,) in the solver's order (x, y, z per node)."""

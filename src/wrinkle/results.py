@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -120,9 +120,12 @@ class Results:
         directory: str | os.PathLike,
         probes: Mapping[str, np.ndarray] | None = None,
         units: Mapping[str, str] | None = None,
+        file_format: str = "vtu",
+        fields: Sequence[str] | None = None,
     ) -> Path:
         """Write every step (ParaView files, summary.json, history.csv) into ``directory``;
-        probes and units default to the results' own (from a case file). Returns the
+        probes and units default to the results' own (from a case file); file_format "vtu"
+        or "xdmf" and the fields to write as ``[output]`` (``wrinkle.output``). Returns the
         directory."""
         return save_results(
             self,
@@ -130,6 +133,8 @@ class Results:
             probes=self.probes if probes is None else probes,
             units=self.units if units is None else units,
             case=self.source,
+            file_format=file_format,
+            fields=fields,
         )
 
     @property

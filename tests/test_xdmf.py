@@ -1,0 +1,126 @@
+"""The XDMF time series (``[output] format = "xdmf"``, issue 22 item 3): read back by an
+independent reader (meshio's TimeSeriesReader) it holds the same mesh and fields as the
+.vtu files; the mesh is written once; the chosen fields alone are written; restart and
+open_results work on it; bad [output] keys are one line, exit status 2."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import wrinkle
+from wrinkle.case import read_case
+from wrinkle.cli import main
+
+meshio = pytest.importorskip("meshio")
+pytest.importorskip("h5py")
+
+CASE = """
+[mesh]
+rectangle = {width = 1.0, height = 1.0, nx = 6, ny = 6}
+[material]
+model = "svk"
+E = 1000.0
+nu = 0.3
+thickness = 0.01
+[[support]]
+label = "bottom"
+nodes = "y == 0"
+fix = ["x", "y", "z"]
+[[support]]
+label = "top"
+nodes = "y == 1"
+displacement = [0.2, 0.05, 0.0]
+[[cable]]
+nodes = "x == 0"
+EA = 10.0
+[solver]
+steps = 3
+"""
+
+
+def run(tmp_path: Path, name: str, output: str) -> Path:
+    case = tmp_path / f"{name}.toml"
+    case.write_text(CASE + output)
+    out = tmp_path / name
+    assert main(["run", str(case), "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def test_xdmf_holds_the_vtu_files_mesh_and_fields(tmp_path):
+    vtu = run(tmp_path, "vtu", "")
+    xdmf = run(tmp_path, "xdmf", '[output]\nformat = "xdmf"\n')
+    names = sorted(p.name for p in xdmf.iterdir())
+    assert names == sorted(
+        ["history.csv", "mesh.h5", "results.xdmf", "summary.json"]
+        + [f"step_{k:04d}.h5" for k in (1, 2, 3)]
+    )
+    with meshio.xdmf.TimeSeriesReader(xdmf / "results.xdmf") as reader:
+        points, cells = reader.read_points_cells()
+        assert reader.num_steps == 3
+        steps = [reader.read_data(k) for k in range(3)]
+    reference = wrinkle.open_results(vtu)
+    np.testing.assert_array_equal(points, reference.mesh().nodes)
+    np.testing.assert_array_equal(cells[0].data, reference.mesh().triangles)
+    for k, (time, point_data, cell_data) in enumerate(steps):
+        assert time == reference.load_factors[k]
+        fields = reference.fields(k)
+        for name, values in point_data.items():
+            np.testing.assert_array_equal(values, fields[name])
+        for name, (values,) in cell_data.items():
+            np.testing.assert_array_equal(values, fields[name])
+        assert set(point_data) | set(cell_data) == set(fields) - {"cable_force", "cable_taut"}
+    # the mesh once: the step files hold no points or triangles
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(xdmf / "step_0002.h5") as handle:
+        assert set(handle) == {"point", "cell"}
+        assert handle["point/displacement"].shape == (49, 3)
+
+
+def test_the_chosen_fields_alone_are_written_with_the_displacement(tmp_path):
+    for fmt in ("vtu", "xdmf"):
+        out = run(tmp_path, fmt, f'[output]\nformat = "{fmt}"\nfields = ["state", "stress"]\n')
+        fields = wrinkle.open_results(out).fields()
+        assert set(fields) == {"displacement", "state", "stress"}, fmt
+
+
+def test_an_xdmf_run_restarts(tmp_path):
+    """Stopped after a step and restarted: the same steps as the uninterrupted xdmf run,
+    results.xdmf listing all three."""
+    full = run(tmp_path, "full", '[output]\nformat = "xdmf"\n')
+    path = tmp_path / "full.toml"
+    count = [0]
+
+    def stop(step):
+        count[0] += 1
+        if count[0] == 1:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        read_case(path).run(tmp_path / "again", on_step=stop)
+    read_case(path).run(tmp_path / "again", restart=True)
+    again = wrinkle.open_results(tmp_path / "again")
+    np.testing.assert_allclose(
+        again.displacement(), wrinkle.open_results(full).displacement(), atol=1e-14
+    )
+    with meshio.xdmf.TimeSeriesReader(tmp_path / "again" / "results.xdmf") as reader:
+        assert reader.num_steps == 3
+
+
+@pytest.mark.parametrize(
+    "output, message",
+    [
+        ('[output]\nformat = "hdf"\n', "unknown format 'hdf' (one of vtu, xdmf)"),
+        ('[output]\nfields = ["stres"]\n', "unknown field 'stres'"),
+        ('[output]\nfields = "stress"\n', "'fields' must be a list of field names"),
+        ("[output]\nkind = 1\n", "unknown key 'kind'"),
+    ],
+)
+def test_bad_output_keys_are_one_line_exit_2(tmp_path, capsys, output, message):
+    case = tmp_path / "case.toml"
+    case.write_text(CASE + output)
+    assert main(["run", str(case), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and "[output]" in err and len(err.splitlines()) == 1
