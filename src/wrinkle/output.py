@@ -104,6 +104,24 @@ STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE = (
     "load_displacement.png",
     "pressure_volume.png",
 )
+SHAPE_PICTURE, STRESS_3D_PICTURE, HEIGHT_PICTURE, FIBRE_PICTURE, NEWTON_PICTURE = (
+    "shape_3d.png",
+    "stress_3d.png",
+    "height.png",
+    "fibres.png",
+    "convergence.png",
+)
+PICTURES = (
+    STATE_PICTURE,
+    STRESS_PICTURE,
+    CURVE_PICTURE,
+    VOLUME_PICTURE,
+    SHAPE_PICTURE,
+    STRESS_3D_PICTURE,
+    HEIGHT_PICTURE,
+    FIBRE_PICTURE,
+    NEWTON_PICTURE,
+)
 COLLECTION = "results.pvd"
 MODE_COLLECTION = "modes.pvd"
 STEP_FILE = re.compile(r"step_\d{4,}\.vtu")
@@ -223,8 +241,7 @@ class ResultWriter:
             system.reference_volume if system is not None and self.has_volume else None
         )
         self.out_dir.mkdir(parents=True, exist_ok=True)
-        pictures = {STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE}
-        pictures.add(MODE_COLLECTION)
+        pictures = {*PICTURES, MODE_COLLECTION}
         for old in self.out_dir.iterdir():
             if (
                 STEP_FILE.fullmatch(old.name)
