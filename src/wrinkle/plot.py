@@ -754,7 +754,7 @@ def _shade(colours: np.ndarray, x: np.ndarray, triangles: np.ndarray) -> np.ndar
     """RGBA face colours (m, 4) darkened by a light from above the camera (both sides lit)."""
     light = _towards_viewer() + np.array([0.0, 0.0, 0.8])
     light /= np.linalg.norm(light)
-    brightness = 0.5 + 0.5 * np.abs(_normals(x, triangles) @ light)
+    brightness = 0.4 + 0.6 * np.abs(_normals(x, triangles) @ light)
     shaded = colours.copy()
     shaded[:, :3] *= brightness[:, None]
     return shaded
@@ -772,17 +772,34 @@ def _facing(x: np.ndarray, triangles: np.ndarray) -> np.ndarray:
 def _figure_3d(x: np.ndarray, length_unit: str, width: float = 8.5) -> tuple[Figure, Any]:
     """A figure with one 3-D axes holding the points x (n, 3) at equal scales, orthographic,
     seen from elevation 28 degrees, azimuth -60 degrees."""
-    fig = new_figure(figsize=(width, 6.4), layout="constrained")
-    ax = fig.add_subplot(projection="3d")
+    from matplotlib.ticker import MaxNLocator
+
     low, high = x.min(axis=0), x.max(axis=0)
     span = high - low
     floor = 0.02 * max(float(span.max()), 1e-300)
     middle = 0.5 * (low + high)
     span = np.maximum(span, floor)
+    # the box on the screen (orthographic view; matplotlib scales the box to a diagonal of
+    # sqrt(3) times zoom and draws it in a square of the axes' smaller side): the figure's
+    # height and the zoom make it fill the axes
+    azimuth = np.radians(_AZIMUTH)
+    across = np.array([-np.sin(azimuth), np.cos(azimuth), 0.0])
+    up = np.cross(_towards_viewer(), across)
+    box = span * np.sqrt(3.0) / np.linalg.norm(span)
+    corners = np.array(np.meshgrid([0, 1], [0, 1], [0, 1])).reshape(3, -1).T * box
+    screen_width, screen_height = np.ptp(corners @ across), np.ptp(corners @ up)
+    plot_width = width - 2.6  # the legend or the colour bar beside
+    plot_height = plot_width * float(np.clip(screen_height / screen_width, 0.35, 1.0))
+    square = min(plot_width, plot_height)
+    zoom = 1.15 * min(plot_width / square / screen_width, plot_height / square / screen_height)
+    fig = new_figure(figsize=(width, plot_height + 1.4), layout="constrained")
+    ax = fig.add_subplot(projection="3d")
     for k, name in enumerate(AXIS_NAMES):
         getattr(ax, f"set_{name}lim")(middle[k] - 0.5 * span[k], middle[k] + 0.5 * span[k])
-        getattr(ax, f"set_{name}label")(_with_unit(name, length_unit))
-    ax.set_box_aspect(tuple(span / span.max()), zoom=0.92)
+        getattr(ax, f"set_{name}label")(_with_unit(name, length_unit), fontsize=9)
+        bins = int(np.clip(round(7 * span[k] / span.max()), 1, 7))
+        getattr(ax, f"{name}axis").set_major_locator(MaxNLocator(bins + 1))
+    ax.set_box_aspect(tuple(span / span.max()), zoom=float(np.clip(zoom, 0.6, 1.35)))
     ax.set_proj_type("ortho")
     ax.view_init(elev=_ELEVATION, azim=_AZIMUTH)
     ax.computed_zorder = False  # the lines are drawn on the faces, not sorted among them
