@@ -789,7 +789,7 @@ def _figure_3d(x: np.ndarray, length_unit: str, width: float = 8.5) -> tuple[Fig
     corners = np.array(np.meshgrid([0, 1], [0, 1], [0, 1])).reshape(3, -1).T * box
     screen_width, screen_height = np.ptp(corners @ across), np.ptp(corners @ up)
     plot_width = width - 2.6  # the legend or the colour bar beside
-    plot_height = plot_width * float(np.clip(screen_height / screen_width, 0.35, 1.0))
+    plot_height = plot_width * float(np.clip(screen_height / screen_width, 0.5, 1.0))
     square = min(plot_width, plot_height)
     zoom = 1.15 * min(plot_width / square / screen_width, plot_height / square / screen_height)
     fig = new_figure(figsize=(width, plot_height + 1.4), layout="constrained")
@@ -798,8 +798,12 @@ def _figure_3d(x: np.ndarray, length_unit: str, width: float = 8.5) -> tuple[Fig
         getattr(ax, f"set_{name}lim")(middle[k] - 0.5 * span[k], middle[k] + 0.5 * span[k])
         getattr(ax, f"set_{name}label")(_with_unit(name, length_unit), fontsize=9)
         bins = int(np.clip(round(7 * span[k] / span.max()), 1, 7))
-        getattr(ax, f"{name}axis").set_major_locator(MaxNLocator(bins + 1))
-    ax.set_box_aspect(tuple(span / span.max()), zoom=float(np.clip(zoom, 0.6, 1.35)))
+        axis = getattr(ax, f"{name}axis")
+        if high[k] - low[k] < floor:  # flat along it: one tick, at the membrane
+            axis.set_ticks([middle[k]])
+        else:
+            axis.set_major_locator(MaxNLocator(bins + 1))
+    ax.set_box_aspect(tuple(span / span.max()), zoom=float(np.clip(zoom, 0.6, 1.0)))
     ax.set_proj_type("ortho")
     ax.view_init(elev=_ELEVATION, azim=_AZIMUTH)
     ax.computed_zorder = False  # the lines are drawn on the faces, not sorted among them
@@ -863,7 +867,9 @@ def _plot_shape_3d(
                 label="tension lines" + (",\nsampled" if sampled else ""),
             )
         )
-    ax.legend(handles=handles, loc="upper left", title="elements (of the model)", fontsize=8)
+    fig.legend(
+        handles=handles, loc="outside left upper", title="elements (of the model)", fontsize=8
+    )
     note = "; drawn coarsened (vertex clustering)" if shape.decimated else ""
     ax.set_title(
         f"Taut, wrinkled and slack elements, deformed membrane in 3-D\n{where}\n"
