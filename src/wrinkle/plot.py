@@ -958,14 +958,13 @@ def _plot_height(shape: MembraneShape, where: str, length_unit: str, path: Path)
     fig = new_figure(figsize=(7.5, 1.4 + 5.1 * aspect), layout="constrained")
     ax = fig.subplots()
     ax.set_aspect("equal")
+    from matplotlib.tri import Triangulation
+
+    plan = Triangulation(reference[:, a], reference[:, b], triangles)
     levels = np.linspace(float(height.min()), float(height.max()), 15)
-    image = ax.tricontourf(
-        reference[:, a], reference[:, b], triangles, height, levels=levels, cmap="cividis"
-    )
+    image = ax.tricontourf(plan, height, levels=levels, cmap="cividis")
     ax.tricontour(
-        reference[:, a],
-        reference[:, b],
-        triangles,
+        plan,
         height,
         levels=levels,
         colors="0.15",
