@@ -124,3 +124,12 @@ def test_bad_output_keys_are_one_line_exit_2(tmp_path, capsys, output, message):
     assert main(["run", str(case), "--out", str(tmp_path / "out"), "--quiet"]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and "[output]" in err and len(err.splitlines()) == 1
+
+
+def test_pictures_are_drawn_from_an_xdmf_folder(tmp_path):
+    pytest.importorskip("matplotlib")
+    from wrinkle.plot import plot_results
+
+    out = run(tmp_path, "xdmf", '[output]\nformat = "xdmf"\n')
+    names = {path.name for path in plot_results(out)}
+    assert {"state.png", "shape_3d.png", "load_displacement.png"} <= names

@@ -1,13 +1,16 @@
 """Command line: ``wrinkle run CASE [--out DIR] [--restart] [-q]``, ``wrinkle formfind
-CASE [--out DIR] [-q]``, ``wrinkle plot DIR``, ``wrinkle --version`` (also ``python -m
-wrinkle ...``).
+CASE [--out DIR] [-q]``, ``wrinkle plot DIR [--load LOAD]``, ``wrinkle show DIR``,
+``wrinkle --version`` (also ``python -m wrinkle ...``).
 
 ``run`` solves a TOML case file and writes each converged step into DIR as it converges
 (``wrinkle.case.Case.run``; with a [formfinding] table it form-finds first; ``--restart``
 continues from the last converged step in DIR); ``formfind``
 form-finds the case (its [formfinding] table, or the defaults) without its loads and writes
 the found form into DIR, with ``formfound.msh``; ``plot`` draws the pictures of such a
-directory (``wrinkle.plot.plot_results``); ``-v`` before the command logs every iteration.
+directory (``wrinkle.plot.plot_results``; ``--load``: pressure, load_factor or a support's
+label on the load axis of load_displacement.png); ``show`` opens an interactive view of the
+last step (``wrinkle.show.show_results``, needs the ``viz`` extra, pyvista); ``-v`` before
+the command logs every iteration.
 
 Exit status: 0 done; 1 a load step did not converge, no form was found, the last state has
 no natural modes ([modes] on an unstable state), or a results file could not be written
@@ -88,7 +91,7 @@ def _plot(args: argparse.Namespace) -> int:
     from wrinkle.plot import DamagedResults, plot_results
 
     try:
-        paths = plot_results(Path(args.directory))
+        paths = plot_results(Path(args.directory), load=args.load)
     except DamagedResults as damaged:  # the readable steps are drawn; say what is not
         for path in damaged.paths:
             print(f"wrote {path}")
@@ -96,6 +99,13 @@ def _plot(args: argparse.Namespace) -> int:
         return 2
     for path in paths:
         print(f"wrote {path}")
+    return 0
+
+
+def _show(args: argparse.Namespace) -> int:
+    from wrinkle.show import show_results
+
+    show_results(Path(args.directory))
     return 0
 
 
@@ -125,7 +135,18 @@ def main(argv: list[str] | None = None) -> int:
     formfind.set_defaults(run=_run)
     plot = sub.add_parser("plot", help="pictures of the results in a directory")
     plot.add_argument("directory", help="directory written by wrinkle run")
+    plot.add_argument(
+        "--load",
+        default=None,
+        help="load axis of load_displacement.png: pressure, load_factor or a support's label "
+        "(default: the pressure if the run has one, else the load factor)",
+    )
     plot.set_defaults(run=_plot)
+    show = sub.add_parser(
+        "show", help="interactive view of the last step (needs pyvista: wrinkle[viz])"
+    )
+    show.add_argument("directory", help="directory written by wrinkle run")
+    show.set_defaults(run=_show)
     args = parser.parse_args(argv)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING, format="%(message)s"

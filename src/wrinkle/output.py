@@ -117,6 +117,24 @@ STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE = (
     "load_displacement.png",
     "pressure_volume.png",
 )
+SHAPE_PICTURE, STRESS_3D_PICTURE, HEIGHT_PICTURE, FIBRE_PICTURE, NEWTON_PICTURE = (
+    "shape_3d.png",
+    "stress_3d.png",
+    "height.png",
+    "fibres.png",
+    "convergence.png",
+)
+PICTURES = (
+    STATE_PICTURE,
+    STRESS_PICTURE,
+    CURVE_PICTURE,
+    VOLUME_PICTURE,
+    SHAPE_PICTURE,
+    STRESS_3D_PICTURE,
+    HEIGHT_PICTURE,
+    FIBRE_PICTURE,
+    NEWTON_PICTURE,
+)
 COLLECTION = "results.pvd"
 MODE_COLLECTION = "modes.pvd"
 STEP_FILE = re.compile(r"step_\d{4,}\.(vtu|h5)")
@@ -271,8 +289,7 @@ class ResultWriter:
         kept: set[str] = set()
         if resume:
             kept = self._resume()
-        pictures = {STATE_PICTURE, STRESS_PICTURE, CURVE_PICTURE, VOLUME_PICTURE}
-        pictures.add(MODE_COLLECTION)
+        pictures = {*PICTURES, MODE_COLLECTION}
         # the other format's collection would show an old run
         pictures.add(COLLECTION if file_format == "xdmf" else XDMF_COLLECTION)
         if file_format == "xdmf":

@@ -97,9 +97,11 @@ class ResultsFolder:
         """(n_steps,) the load factor of each converged step."""
         return np.array([float(step["load_factor"]) for step in self.steps])
 
-    def _read(self, step: int) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-        """(nodes, triangles, fields) of a step's file, .vtu or the xdmf format's .h5; the
-        last step read is kept (one at a time: a 10^6-element step is large)."""
+    def step_data(self, step: int = -1) -> tuple[np.ndarray, np.ndarray, dict, dict]:
+        """(nodes (n_nodes, 3), triangles (n_elements, 3), point data, the triangles' cell
+        data) of a step's file, .vtu or the xdmf format's .h5; ValueError naming the file if
+        it cannot be read. The last step read is kept (one at a time: a 10^6-element step is
+        large)."""
         if not self.steps:
             raise ValueError(f"{self.directory / SUMMARY}: no converged step")
         index = range(len(self.steps))[step]  # IndexError for a step out of range
@@ -107,32 +109,34 @@ class ResultsFolder:
             name = str(self.steps[index]["file"])
             self._cache.clear()
             if name.endswith(".h5"):
-                nodes, triangles, point, cell = read_step(self.directory, name)
-                self._cache[index] = (nodes, triangles, {**point, **cell})
+                self._cache[index] = read_step(self.directory, name)
             else:
                 path = self.directory / name
                 data = meshio_read(path, f"{path}")
-                fields = {key: np.asarray(value) for key, value in data.point_data.items()}
+                point = {key: np.asarray(value) for key, value in data.point_data.items()}
+                cell = {}
                 kinds = [block.type for block in data.cells]
                 for key, blocks in data.cell_data.items():
                     for kind, values in zip(kinds, blocks, strict=True):
                         if kind == "triangle":
-                            fields[key] = np.asarray(values)
+                            cell[key] = np.asarray(values)
                 triangles = data.get_cells_type("triangle")
-                self._cache[index] = (np.asarray(data.points, dtype=float), triangles, fields)
+                nodes = np.asarray(data.points, dtype=float)
+                self._cache[index] = (nodes, triangles, point, cell)
         return self._cache[index]
 
     def mesh(self, step: int = -1) -> Mesh:
         """The mesh (reference configuration) of a step's file: nodes (n_nodes, 3) and the
         triangles (n_elements, 3)."""
-        nodes, triangles, _ = self._read(step)
+        nodes, triangles, _, _ = self.step_data(step)
         return Mesh(nodes, triangles)
 
     def fields(self, step: int = -1) -> dict[str, np.ndarray]:
         """A step's point data (n_nodes, ...) and cell data of its triangles (n_elements,
         ...) by name ("displacement", "reaction", "stress_nodal", "state", "stress", ...:
         the fields of docs/case-file.md), from its .vtu or .h5 file."""
-        return dict(self._read(step)[2])
+        _, _, point, cell = self.step_data(step)
+        return {**point, **cell}
 
     def displacement(self, step: int = -1) -> np.ndarray:
         """A step's displacements, (n_nodes * 3,) in the solver's order (x, y, z per node)."""
