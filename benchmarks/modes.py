@@ -217,7 +217,7 @@ def main() -> None:
     parser.add_argument("--elements", type=int, default=100_000)
     parser.add_argument("--count", type=int, default=10)
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--csv", default="modes.csv")
+    parser.add_argument("--csv", help="also write the table as CSV")
     args = parser.parse_args()
     n_elements, K, M, f11 = membrane(args.elements)
     n = K.shape[0]
@@ -262,7 +262,8 @@ def main() -> None:
             f"{row['time_ratio']:>7.2f} {row['memory_ratio']:>9.2f} {row['f1_error']:>9.2e} "
             f"{row['vs_old']:>8.1e}"
         )
-    write_csv(args.csv, rows, list(rows[0]))
+    if args.csv:
+        write_csv(args.csv, rows, list(rows[0]))
 
 
 if __name__ == "__main__":
