@@ -1084,7 +1084,8 @@ def _plot_newton_history(summary: dict, path: Path) -> Path:
     ax.grid(True, which="both", alpha=0.25)
     labels = "; the steps' load factors above" if len(steps) <= 24 else ""
     ax.set_title(
-        f"Convergence: residual of each iteration, {len(steps)} steps, {start} iterations{labels}",
+        f"Convergence: residual of each iteration, {len(steps)} "
+        f"step{'s' if len(steps) != 1 else ''}, {start} iterations{labels}",
         fontsize=10,
         pad=14,
     )
