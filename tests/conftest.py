@@ -34,6 +34,16 @@ displacement = [0.05, 0.02, 0.0]
 """
 
 
+def sheet_case(nx: int = 2, top: str = "[0.05, 0.02, 0.0]", steps: int = 1) -> str:
+    """SQUARE_CASE's sheet on an nx x nx mesh, its supports labelled "bottom" and "top",
+    the top edge moved by ``top``, in ``steps`` load steps."""
+    case = SQUARE_CASE.replace("nx = 2, ny = 2", f"nx = {nx}, ny = {nx}")
+    case = case.replace('nodes = "y == 0"', 'label = "bottom"\nnodes = "y == 0"')
+    case = case.replace('nodes = "y == 1"', 'label = "top"\nnodes = "y == 1"')
+    case = case.replace("displacement = [0.05, 0.02, 0.0]", f"displacement = {top}")
+    return case + f"\n[solver]\nsteps = {steps}\n"
+
+
 def random_spd_stiffness(seed: int = 5) -> np.ndarray:
     """A general 6x6 SPD stiffness H = A A^T + 2 I, A standard normal: it couples every
     in-plane and out-of-plane component (no material symmetry at all)."""

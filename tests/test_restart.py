@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import sheet_case
 
 import wrinkle
 from wrinkle.case import read_case
@@ -17,25 +18,7 @@ from wrinkle.cli import main
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
-SHEAR = """
-[mesh]
-rectangle = {width = 1.0, height = 1.0, nx = 8, ny = 8}
-[material]
-model = "svk"
-E = 1000.0
-nu = 0.3
-thickness = 0.01
-[[support]]
-label = "bottom"
-nodes = "y == 0"
-fix = ["x", "y", "z"]
-[[support]]
-label = "top"
-nodes = "y == 1"
-displacement = [0.2, 0.05, 0.0]
-[solver]
-steps = 5
-"""
+SHEAR = sheet_case(nx=8, top="[0.2, 0.05, 0.0]", steps=5)
 
 
 def interrupted(case, out: Path, after: int) -> None:

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import sheet_case
 
 import wrinkle
 from wrinkle.case import read_case
@@ -129,23 +130,9 @@ def test_moment_about_in_a_case_file(tmp_path):
     """[[support]] moment_about = [x, y, z] reaches the summary; a bad one is one line,
     exit status 2."""
     case = tmp_path / "case.toml"
-    text = """
-[mesh]
-rectangle = {width = 1.0, height = 1.0, nx = 2, ny = 2}
-[material]
-model = "svk"
-E = 1000.0
-nu = 0.3
-thickness = 0.01
-[[support]]
-label = "bottom"
-nodes = "y == 0"
-fix = ["x", "y", "z"]
-moment_about = [0.5, 0.0, 0.0]
-[[support]]
-nodes = "y == 1"
-displacement = [0.05, 0.02, 0.0]
-"""
+    text = sheet_case().replace(
+        'fix = ["x", "y", "z"]', 'fix = ["x", "y", "z"]\nmoment_about = [0.5, 0.0, 0.0]', 1
+    )
     case.write_text(text)
     assert main(["run", str(case), "--out", str(tmp_path / "out"), "--quiet"]) == 0
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())

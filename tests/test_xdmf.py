@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import sheet_case
 
 import wrinkle
 from wrinkle.case import read_case
@@ -17,28 +18,14 @@ from wrinkle.cli import main
 meshio = pytest.importorskip("meshio")
 pytest.importorskip("h5py")
 
-CASE = """
-[mesh]
-rectangle = {width = 1.0, height = 1.0, nx = 6, ny = 6}
-[material]
-model = "svk"
-E = 1000.0
-nu = 0.3
-thickness = 0.01
-[[support]]
-label = "bottom"
-nodes = "y == 0"
-fix = ["x", "y", "z"]
-[[support]]
-label = "top"
-nodes = "y == 1"
-displacement = [0.2, 0.05, 0.0]
+CASE = (
+    sheet_case(nx=6, top="[0.2, 0.05, 0.0]", steps=3)
+    + """
 [[cable]]
 nodes = "x == 0"
 EA = 10.0
-[solver]
-steps = 3
 """
+)
 
 
 def run(tmp_path: Path, name: str, output: str) -> Path:

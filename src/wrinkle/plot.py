@@ -322,7 +322,6 @@ def _plot_states(view: _View, cell: dict, where: str, path: Path) -> Path:
     from matplotlib.artist import Artist
     from matplotlib.collections import LineCollection, PolyCollection
     from matplotlib.colors import to_rgba_array
-    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     fig, ax = view.figure(width=8.5)
@@ -353,15 +352,7 @@ def _plot_states(view: _View, cell: dict, where: str, path: Path) -> Path:
                 capstyle="round",
             )
         )
-        handles.append(
-            Line2D(
-                [],
-                [],
-                color="#202020",
-                lw=1.2,
-                label="tension lines" + (",\nsampled" if sampled else ""),
-            )
-        )
+        handles.append(_tension_handle(sampled, 1.2))
     ax.legend(
         handles=handles,
         loc="upper left",
@@ -829,7 +820,6 @@ def _plot_shape_3d(
     wrinkled faces that face the viewer."""
     from matplotlib.artist import Artist
     from matplotlib.colors import to_rgba_array
-    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
     from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
@@ -853,15 +843,7 @@ def _plot_shape_3d(
                 list(segments), colors="#202020", linewidths=0.7 if sampled else 1.0, zorder=2
             )
         )
-        handles.append(
-            Line2D(
-                [],
-                [],
-                color="#202020",
-                lw=1.0,
-                label="tension lines" + (",\nsampled" if sampled else ""),
-            )
-        )
+        handles.append(_tension_handle(sampled, 1.0))
     fig.legend(
         handles=handles, loc="outside left upper", title="elements (of the model)", fontsize=8
     )
@@ -873,6 +855,14 @@ def _plot_shape_3d(
     )
     fig.savefig(path, dpi=150)
     return path
+
+
+def _tension_handle(sampled: bool, width: float) -> Any:
+    """The legend entry of the tension lines (line width ``width``, points)."""
+    from matplotlib.lines import Line2D
+
+    label = "tension lines" + (",\nsampled" if sampled else "")
+    return Line2D([], [], color="#202020", lw=width, label=label)
 
 
 def _stress_range(major: np.ndarray) -> tuple[float, float, bool]:
