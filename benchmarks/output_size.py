@@ -8,7 +8,9 @@ edge, displaced by the smooth field u = a (sin(pi x) sin(pi y), sin(2 pi x) sin(
 as in a solved state, so the files compress as real results do. Its reactions are those of
 that field (``DiscreteSystem.reactions``). Each format writes --steps steps into its own
 folder; the table gives the median of the steps' sizes and write times (the per-step write
-is ``ResultWriter.write_step``, its element evaluation included), and the mesh file once.
+is ``ResultWriter.write_step``, its element evaluation included), the mesh file once, the
+whole run's folder and its ratio to the .vtu run's with all fields; also in single
+precision (``[output] precision = "single"``: all but the displacement and reactions).
 
     python benchmarks/output_size.py --elements 100000 1000000
 """
@@ -55,8 +57,14 @@ def sheet(elements: int) -> tuple[Model, SimpleNamespace]:
     return model, step
 
 
-def measure(model: Model, step, file_format: str, fields, steps: int, folder: Path) -> dict:
-    writer = ResultWriter(folder, model, file_format=file_format, fields=fields)
+def measure(
+    model: Model, step, file_format: str, fields, precision: str, steps: int, folder: Path
+) -> dict:
+    """Write ``steps`` steps into ``folder``: the median size (MB) and time of a step, the
+    mesh file's size and the whole folder's."""
+    writer = ResultWriter(
+        folder, model, file_format=file_format, fields=fields, precision=precision
+    )
     sizes, times = [], []
     for _ in range(steps):
         start = time.perf_counter()
@@ -69,39 +77,54 @@ def measure(model: Model, step, file_format: str, fields, steps: int, folder: Pa
         "step_MB": statistics.median(sizes),
         "write_s": statistics.median(times),
         "mesh_MB": mesh_file.stat().st_size / 1e6 if mesh_file.is_file() else 0.0,
+        "run_MB": sum(path.stat().st_size for path in folder.iterdir()) / 1e6,
     }
+
+
+CHOICES = (  # format, fields, their label, precision; the first is the baseline
+    ("vtu", None, "all", "double"),
+    ("xdmf", None, "all", "double"),
+    ("xdmf", None, "all", "single"),
+    ("vtu", FEW, "four", "double"),
+    ("xdmf", FEW, "four", "double"),
+    ("xdmf", FEW, "four", "single"),
+)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--elements", type=float, nargs="+", default=[1e5, 1e6])
-    parser.add_argument("--steps", type=int, default=3)
+    parser.add_argument("--steps", type=int, default=10)
     parser.add_argument("--csv", help="also write the table as CSV")
     args = parser.parse_args()
     print(f"{platform.processor() or platform.machine()}, {time.strftime('%Y-%m-%d')}")
     print(
-        f"{'elements':>10} {'format':>6} {'fields':>6} {'MB a step':>10} {'s a step':>9} "
-        f"{'mesh MB once':>13}"
+        f"{'elements':>10} {'format':>6} {'fields':>6} {'precision':>9} {'MB a step':>10} "
+        f"{'s a step':>9} {'mesh MB once':>13} {'MB the run':>11} {'of vtu':>7}"
     )
     rows = []
     for elements in args.elements:
         model, step = sheet(int(elements))
-        for file_format, fields, label in (
-            ("vtu", None, "all"),
-            ("xdmf", None, "all"),
-            ("vtu", FEW, "few"),
-            ("xdmf", FEW, "few"),
-        ):
+        baseline = None
+        for file_format, fields, label, precision in CHOICES:
             folder = Path(tempfile.mkdtemp(prefix="wrinkle-output-"))
             try:
-                row = measure(model, step, file_format, fields, args.steps, folder)
+                row = measure(model, step, file_format, fields, precision, args.steps, folder)
             finally:
                 shutil.rmtree(folder)
-            row.update(elements=model.mesh.n_elements, format=file_format, fields=label)
+            baseline = baseline or row["run_MB"]
+            row.update(
+                elements=model.mesh.n_elements,
+                format=file_format,
+                fields=label,
+                precision=precision,
+                of_vtu=row["run_MB"] / baseline,
+            )
             rows.append(row)
             print(
-                f"{row['elements']:>10,} {file_format:>6} {label:>6} {row['step_MB']:>10.1f} "
-                f"{row['write_s']:>9.2f} {row['mesh_MB']:>13.1f}",
+                f"{row['elements']:>10,} {file_format:>6} {label:>6} {precision:>9} "
+                f"{row['step_MB']:>10.1f} {row['write_s']:>9.2f} {row['mesh_MB']:>13.1f} "
+                f"{row['run_MB']:>11.1f} {row['of_vtu']:>7.2f}",
                 flush=True,
             )
     if args.csv:

@@ -18,7 +18,7 @@ from wrinkle.cli import main
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
-SHEAR = sheet_case(nx=8, top="[0.2, 0.05, 0.0]", steps=5)
+SHEAR = sheet_case(nx=8, top="[0.2, 0.05, 0.0]", steps=20)
 
 
 def interrupted(case, out: Path, after: int) -> None:
@@ -42,27 +42,29 @@ def shear(tmp_path) -> Path:
 
 
 def test_a_restarted_run_has_the_uninterrupted_runs_steps(shear, tmp_path):
-    """Stopped after 2 of 5 steps and restarted from the command line: the same load
-    factors, displacements equal to round-off (the same increments and predictions), the
-    same work, five rows of history and five step files in the collection."""
+    """Stopped after 7 of 20 steps and restarted from the command line (issue 22: the same
+    final state to 1e-10): the same load factors, every step's displacements equal to
+    round-off (the same increments and predictions), the same work, twenty rows of history
+    and twenty step files in the collection."""
     assert main(["run", str(shear), "--out", str(tmp_path / "full"), "--quiet"]) == 0
-    interrupted(read_case(shear), tmp_path / "again", after=2)
+    interrupted(read_case(shear), tmp_path / "again", after=7)
     stopped = wrinkle.open_results(tmp_path / "again")
-    assert len(stopped) == 2 and not stopped.summary["converged"]
+    assert len(stopped) == 7 and not stopped.summary["converged"]
     assert main(["run", str(shear), "--out", str(tmp_path / "again"), "--restart", "-q"]) == 0
     full, again = (wrinkle.open_results(tmp_path / name) for name in ("full", "again"))
     np.testing.assert_array_equal(again.load_factors, full.load_factors)
-    for step in range(5):
+    scale = np.abs(full.displacement()).max()
+    for step in range(20):
         np.testing.assert_allclose(
-            again.displacement(step), full.displacement(step), rtol=0, atol=1e-14
+            again.displacement(step), full.displacement(step), rtol=0, atol=1e-10 * scale
         )
     assert again.summary["converged"]
     assert again.summary["external_work"] == pytest.approx(full.summary["external_work"], 1e-12)
-    np.testing.assert_array_equal(again.history["step"], [1, 2, 3, 4, 5])
+    np.testing.assert_array_equal(again.history["step"], np.arange(1, 21))
     np.testing.assert_array_equal(again.history["load_factor"], full.history["load_factor"])
     files = sorted(p.name for p in (tmp_path / "again").glob("step_*.vtu"))
-    assert files == [f"step_{k:04d}.vtu" for k in range(1, 6)]
-    assert (tmp_path / "again" / "results.pvd").read_text().count("<DataSet") == 5
+    assert files == [f"step_{k:04d}.vtu" for k in range(1, 21)]
+    assert (tmp_path / "again" / "results.pvd").read_text().count("<DataSet") == 20
 
 
 def test_a_pressure_run_restarted_ends_where_the_full_one_does(tmp_path):
@@ -86,10 +88,10 @@ def test_a_crash_between_a_step_file_and_the_summary_is_taken_up(shear, tmp_path
     shutil.copy(tmp_path / "run" / "step_0001.vtu", tmp_path / "run" / "step_0004.vtu")
     read_case(shear).run(tmp_path / "run", restart=True)
     run = wrinkle.open_results(tmp_path / "run")
-    assert len(run) == 5
-    assert np.abs(run.displacement(3) - run.displacement(0)).max() > 1e-3  # rewritten
+    assert len(run) == 20
+    assert np.abs(run.displacement(3) - run.displacement(0)).max() > 1e-4  # rewritten
     fresh = read_case(shear).run(tmp_path / "empty", restart=True)
-    assert len(fresh) == 5
+    assert len(fresh) == 20
 
 
 def test_open_results_gives_fields_history_and_mesh(shear, tmp_path):
@@ -135,9 +137,32 @@ def test_restart_refusals_are_one_line_exit_2(shear, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "a mesh of 81 nodes, not the case's 25" in err and len(err.splitlines()) == 1
     arc = tmp_path / "arc.toml"
-    arc.write_text(SHEAR.replace("steps = 5", 'steps = 5\ncontrol = "arc-length"'))
+    arc.write_text(SHEAR.replace("steps = 20", 'steps = 20\ncontrol = "arc-length"'))
     assert main(["run", str(arc), "--out", str(out), "--restart", "-q"]) == 2
     assert "only a load-controlled path" in capsys.readouterr().err
     summary = json.loads((out / "summary.json").read_text())
     assert len(summary["steps"]) == 2  # the refused restarts left the folder as it was
     assert summary["message"] == "interrupted"
+
+
+EXAMPLE_CASES = sorted(EXAMPLES.glob("*.toml")) + sorted(EXAMPLES.glob("*/*.toml"))
+
+
+@pytest.mark.parametrize("path", EXAMPLE_CASES, ids=lambda path: path.stem)
+def test_the_reader_gives_back_every_examples_numbers(path, tmp_path):
+    """Each example run and read back: every step's load factor, displacements and
+    reactions as the in-memory results have them (bit for bit), its element states as
+    counted, and the history's columns as the summary's numbers."""
+    results = read_case(path).run(tmp_path / "out")
+    saved = wrinkle.open_results(tmp_path / "out")
+    assert len(saved) == len(results.steps)
+    np.testing.assert_array_equal(saved.load_factors, [s.load_factor for s in results.steps])
+    for index, step in enumerate(results.steps):
+        fields = saved.fields(index)
+        np.testing.assert_array_equal(saved.displacement(index), step.displacement)
+        np.testing.assert_array_equal(fields["reaction"].reshape(-1), step.reactions)
+        counts = np.bincount(fields["state"], minlength=3)
+        assert tuple(int(c) for c in counts) == tuple(step.states)
+        entry = saved.steps[index]
+        assert saved.history["strain_energy"][index] == entry["strain_energy"]
+        assert saved.history["residual"][index] == step.residual

@@ -51,19 +51,45 @@ def test_xdmf_holds_the_vtu_files_mesh_and_fields(tmp_path):
     reference = wrinkle.open_results(vtu)
     np.testing.assert_array_equal(points, reference.mesh().nodes)
     np.testing.assert_array_equal(cells[0].data, reference.mesh().triangles)
+    upper = [0, 1, 2, 4, 5, 8]  # the symmetric tensors as XDMF's Tensor6: xx xy xz yy yz zz
+
+    def stored(name, values):
+        return values[:, upper] if name in ("stress", "strain", "stress_nodal") else values
+
     for k, (time, point_data, cell_data) in enumerate(steps):
         assert time == reference.load_factors[k]
         fields = reference.fields(k)
         for name, values in point_data.items():
-            np.testing.assert_array_equal(values, fields[name])
+            np.testing.assert_array_equal(values, stored(name, fields[name]))
         for name, (values,) in cell_data.items():
-            np.testing.assert_array_equal(values, fields[name])
+            np.testing.assert_array_equal(values, stored(name, fields[name]))
+        # read back by wrinkle, the tensors have their nine components again: symmetric
+        again = wrinkle.open_results(xdmf).fields(k)
+        for name in ("stress", "strain", "stress_nodal"):
+            scale = np.abs(fields[name]).max()
+            np.testing.assert_allclose(again[name], fields[name], rtol=0, atol=1e-14 * scale)
         assert set(point_data) | set(cell_data) == set(fields) - {"cable_force", "cable_taut"}
     # the mesh once: the step files hold no points or triangles
     h5py = pytest.importorskip("h5py")
     with h5py.File(xdmf / "step_0002.h5") as handle:
         assert set(handle) == {"point", "cell"}
         assert handle["point/displacement"].shape == (49, 3)
+
+
+def test_single_precision_keeps_the_displacement_and_reactions_exact(tmp_path):
+    """[output] precision = "single": the stresses to float32's 6e-8, the displacements
+    and reactions bit for bit, in both formats."""
+    exact = wrinkle.open_results(run(tmp_path, "double", ""))
+    for fmt in ("vtu", "xdmf"):
+        out = run(tmp_path, fmt, f'[output]\nformat = "{fmt}"\nprecision = "single"\n')
+        fields = wrinkle.open_results(out).fields()
+        reference = exact.fields()
+        for name in ("displacement", "reaction"):
+            assert fields[name].dtype == np.float64
+            np.testing.assert_array_equal(fields[name], reference[name])
+        assert fields["stress"].dtype == np.float32
+        scale = np.abs(reference["stress"]).max()
+        np.testing.assert_allclose(fields["stress"], reference["stress"], atol=1e-7 * scale)
 
 
 def test_the_chosen_fields_alone_are_written_with_the_displacement(tmp_path):
@@ -103,6 +129,7 @@ def test_an_xdmf_run_restarts(tmp_path):
         ('[output]\nfields = ["stres"]\n', "unknown field 'stres'"),
         ('[output]\nfields = "stress"\n', "'fields' must be a list of field names"),
         ("[output]\nkind = 1\n", "unknown key 'kind'"),
+        ('[output]\nprecision = "half"\n', "unknown precision 'half' (one of double, single)"),
     ],
 )
 def test_bad_output_keys_are_one_line_exit_2(tmp_path, capsys, output, message):

@@ -43,7 +43,7 @@ from wrinkle.mesh import (
 )
 from wrinkle.model import Model
 from wrinkle.modes import DEFAULT_MASS, MASS_KINDS, Modes
-from wrinkle.output import FIELDS, FORMATS, ResultsWriteError, ResultWriter
+from wrinkle.output import FIELDS, FORMATS, PRECISIONS, ResultsWriteError, ResultWriter
 from wrinkle.reader import SUMMARY, open_results
 from wrinkle.refinement import MAX_REFINED_ELEMENTS, refine
 from wrinkle.results import Results, StepResult
@@ -282,11 +282,13 @@ class ModeSettings:
 @dataclass(frozen=True)
 class OutputSettings:
     """The [output] table: the step files' format ("vtu", one file a step with its mesh;
-    "xdmf", an XDMF time series with the mesh written once, ``wrinkle.xdmf``) and the fields
-    they hold (None: all; "displacement" is always written)."""
+    "xdmf", an XDMF time series with the mesh written once, ``wrinkle.xdmf``), the fields
+    they hold (None: all; "displacement" is always written) and the precision of the
+    floating-point fields ("double", or "single" but for the displacement and reactions)."""
 
     file_format: str = "vtu"
     fields: tuple[str, ...] | None = None
+    precision: str = "double"
 
 
 @dataclass(frozen=True)
@@ -496,6 +498,7 @@ class Case:
                 resume=resume is not None,
                 file_format=self.output.file_format,
                 fields=self.output.fields,
+                precision=self.output.precision,
             )
         except ValueError as error:  # a folder of another case's run
             raise CaseError(f"--restart: {error}") from None
@@ -1024,8 +1027,11 @@ def _read_output(reader: _Reader, table: dict) -> OutputSettings:
     where = "[output]"
     if not isinstance(table, dict):
         reader.fail(where, "must be a table")
-    reader.keys(table, where, set(), {"format", "fields"})
+    reader.keys(table, where, set(), {"format", "fields", "precision"})
     file_format = reader.choice(table, "format", where, FORMATS) if "format" in table else "vtu"
+    precision = (
+        reader.choice(table, "precision", where, PRECISIONS) if "precision" in table else "double"
+    )
     fields = None
     if "fields" in table:
         names = table["fields"]
@@ -1042,7 +1048,7 @@ def _read_output(reader: _Reader, table: dict) -> OutputSettings:
             require_h5py()
         except ImportError as error:
             reader.fail(where, str(error))
-    return OutputSettings(file_format, fields)
+    return OutputSettings(file_format, fields, precision)
 
 
 def _read_modes(reader: _Reader, table: dict, model: Model) -> ModeSettings:

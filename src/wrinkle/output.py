@@ -20,8 +20,10 @@
 - ``results.pvd``: a ParaView collection of the converged steps, timestep = load factor.
 - with ``file_format="xdmf"`` (``[output] format``) instead of the .vtu files and
   results.pvd: ``mesh.h5`` once, ``step_0001.h5``, ... and ``results.xdmf``
-  (``wrinkle.xdmf``), the same fields; ``fields`` chooses the fields of either format
-  (``FIELDS``; "displacement" always).
+  (``wrinkle.xdmf``), the same fields (the symmetric tensors as their six components);
+  ``fields`` chooses the fields of either format (``FIELDS``; "displacement" always), and
+  ``precision`` "single" writes the floating-point fields but the displacement and the
+  reactions in single precision.
 - ``summary.json``: {"converged", "message", "steps": [{"step", "file", "load_factor",
   "iterations", "residual", "states": {"taut", "wrinkled", "slack"}, "reactions":
   {support label: [Fx, Fy, Fz]}, "max_displacement", "residual_history" (the residual
@@ -90,6 +92,7 @@ from wrinkle.xdmf import COLLECTION as XDMF_COLLECTION
 from wrinkle.xdmf import (
     MESH_FILE,
     layout,
+    packed,
     read_layout,
     require_h5py,
     write_collection,
@@ -155,6 +158,9 @@ CELL_FIELDS = (
     "thickness",
 )
 CABLE_FIELDS = ("cable_force", "cable_taut")  # on the cables' line cells, .vtu only
+TENSORS = ("stress", "strain", "stress_nodal")  # symmetric: Tensor6 in the xdmf format
+PRECISIONS = ("double", "single")  # [output] precision of the floating-point fields
+EXACT_FIELDS = ("displacement", "reaction")  # always in double precision (restart, balance)
 FIELDS = (*POINT_FIELDS, *CELL_FIELDS, *CABLE_FIELDS)
 MODE_FILE = re.compile(r"mode_\d{2,}\.vtu")
 
@@ -233,8 +239,12 @@ class ResultWriter:
         resume: bool = False,
         file_format: str = "vtu",
         fields: Sequence[str] | None = None,
+        precision: str = "double",
     ):
         self._start = time.perf_counter()
+        if precision not in PRECISIONS:
+            raise ValueError(f"output precision {precision!r}: one of {', '.join(PRECISIONS)}")
+        self.precision = precision
         if file_format not in FORMATS:
             raise ValueError(f"output format {file_format!r}: one of {', '.join(FORMATS)}")
         unknown = sorted(set(fields or ()) - set(FIELDS))
@@ -532,21 +542,28 @@ class ResultWriter:
         def wanted(name: str) -> bool:
             return chosen is None or name in chosen or name == "displacement"
 
+        single = self.precision == "single"
+
+        def stored(name: str, values: np.ndarray) -> np.ndarray:
+            values = np.ascontiguousarray(values)
+            if single and values.dtype == np.float64 and name not in EXACT_FIELDS:
+                return values.astype(np.float32)
+            return values
+
         return (
-            {name: make() for name, make in point_data.items() if wanted(name)},
-            {
-                name: np.ascontiguousarray(make())
-                for name, make in cell_data.items()
-                if wanted(name)
-            },
+            {name: stored(name, make()) for name, make in point_data.items() if wanted(name)},
+            {name: stored(name, make()) for name, make in cell_data.items() if wanted(name)},
         )
 
     def _write_step_file(self, path: Path, step, report: ElementReport) -> None:
         """The step's fields as ``path`` (step_NNNN.vtu, or step_NNNN.h5 for xdmf)."""
         point_data, cell_data = self._fields(step, report)
         if self.file_format == "xdmf":
-            atomic_write(path, partial(write_step_file, point_data=point_data, cell_data=cell_data))
-            self._layouts.append(layout(point_data, cell_data))
+            write = partial(
+                write_step_file, point_data=point_data, cell_data=cell_data, symmetric=TENSORS
+            )
+            atomic_write(path, write)
+            self._layouts.append(layout(packed(point_data, TENSORS), packed(cell_data, TENSORS)))
             return
         meshio = require_meshio()
         mesh = self.model.mesh
@@ -558,9 +575,9 @@ class ResultWriter:
             segments = self.system.cables.edges  # as line cells, after the triangles
             cells.append(("line", segments))
             for key, value in cell_data.items():
-                blocks[key].append(np.zeros((len(segments), *np.shape(value)[1:])))
+                blocks[key].append(np.zeros((len(segments), *value.shape[1:]), value.dtype))
             if chosen is None or "cable_force" in chosen:
-                blocks["cable_force"] = [np.zeros(mesh.n_elements), cables.axial]
+                blocks["cable_force"] = [np.zeros(mesh.n_elements), cables.axial]  # N, double
             if chosen is None or "cable_taut" in chosen:
                 blocks["cable_taut"] = [
                     np.zeros(mesh.n_elements, np.int32),
@@ -666,9 +683,10 @@ def save_results(
     case: str | os.PathLike | None = None,
     file_format: str = "vtu",
     fields: Sequence[str] | None = None,
+    precision: str = "double",
 ) -> Path:
     """Write every step of a finished ``Results`` into ``out_dir`` (files as ``ResultWriter``,
-    in ``file_format`` with ``fields``).
+    in ``file_format`` with ``fields`` at ``precision``).
 
     The summary says converged if the last step reached load factor 1, otherwise where it
     stopped (e.g. the partial ``results`` of a ConvergenceError); its wall time is the writing
@@ -682,6 +700,7 @@ def save_results(
         case=case,
         file_format=file_format,
         fields=fields,
+        precision=precision,
     )
     for step in results.steps:
         writer.write_step(step)

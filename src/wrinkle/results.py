@@ -122,11 +122,12 @@ class Results:
         units: Mapping[str, str] | None = None,
         file_format: str = "vtu",
         fields: Sequence[str] | None = None,
+        precision: str = "double",
     ) -> Path:
         """Write every step (ParaView files, summary.json, history.csv) into ``directory``;
         probes and units default to the results' own (from a case file); file_format "vtu"
-        or "xdmf" and the fields to write as ``[output]`` (``wrinkle.output``). Returns the
-        directory."""
+        or "xdmf", the fields to write and their precision as ``[output]``
+        (``wrinkle.output``). Returns the directory."""
         return save_results(
             self,
             directory,
@@ -135,6 +136,7 @@ class Results:
             case=self.source,
             file_format=file_format,
             fields=fields,
+            precision=precision,
         )
 
     @property

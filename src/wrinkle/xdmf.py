@@ -2,7 +2,8 @@
 
 The mesh is written once, ``mesh.h5`` (datasets ``/points`` (n_nodes, 3) and ``/triangles``
 (n_elements, 3)); each converged step writes ``step_NNNN.h5`` with one dataset per field
-(``/point/<name>``, ``/cell/<name>``); ``results.xdmf`` (XDMF 3) lists the steps as a
+(``/point/<name>``, ``/cell/<name>``; the symmetric stress and strain tensors as XDMF's
+Tensor6, their six distinct components); ``results.xdmf`` (XDMF 3) lists the steps as a
 temporal collection whose grids take the mesh's topology and geometry by XInclude, the
 layout of meshio's ``TimeSeriesWriter`` (so meshio's ``TimeSeriesReader`` and ParaView's
 XDMF3 readers read it). Each file is written to a temporary file and moved into place
@@ -17,7 +18,7 @@ Needs h5py (``pip install "wrinkle[xdmf]"``).
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from types import ModuleType
 from xml.sax.saxutils import quoteattr
@@ -28,6 +29,7 @@ __all__ = [
     "COLLECTION",
     "MESH_FILE",
     "layout",
+    "packed",
     "read_layout",
     "read_step",
     "require_h5py",
@@ -63,26 +65,48 @@ def write_mesh_file(path: str | os.PathLike, nodes: np.ndarray, triangles: np.nd
         )
 
 
+# the upper triangle of a symmetric 3 x 3 tensor stored row by row (9 components), in XDMF's
+# Tensor6 order xx, xy, xz, yy, yz, zz
+_UPPER = np.array([0, 1, 2, 4, 5, 8])
+_FULL = np.array([0, 1, 2, 1, 3, 4, 2, 4, 5])  # the 9 components from the 6
+
+
+def packed(data: Mapping[str, np.ndarray], symmetric: Sequence[str]) -> dict[str, np.ndarray]:
+    """The fields as stored: each named in ``symmetric`` (a symmetric tensor, (n, 9)) as its
+    upper triangle (n, 6), XDMF's Tensor6; the others as they are."""
+    return {
+        name: np.asarray(values)[:, _UPPER] if name in symmetric else np.asarray(values)
+        for name, values in data.items()
+    }
+
+
 def write_step_file(
     path: str | os.PathLike,
     point_data: Mapping[str, np.ndarray],
     cell_data: Mapping[str, np.ndarray],
+    symmetric: Sequence[str] = (),
 ) -> None:
     """One step's fields at ``path``: /point/<name> (n_nodes, ...), /cell/<name>
-    (n_elements, ...), float64 (int32 for integer fields)."""
+    (n_elements, ...), in their own types; those named in ``symmetric`` as Tensor6
+    (``packed``, marked by the dataset attribute "symmetric_tensor")."""
     h5py = require_h5py()
     with h5py.File(path, "w") as handle:
         for group, data in (("point", point_data), ("cell", cell_data)):
             folder = handle.create_group(group)
-            for name, values in data.items():
-                folder.create_dataset(name, data=np.ascontiguousarray(values), **COMPRESSION)
+            for name, values in packed(data, symmetric).items():
+                dataset = folder.create_dataset(
+                    name, data=np.ascontiguousarray(values), **COMPRESSION
+                )
+                if name in symmetric:
+                    dataset.attrs["symmetric_tensor"] = 1
 
 
 def read_step(
     folder: Path, step_file: str
 ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
     """(nodes, triangles, point data, cell data) of a step written by ``write_step_file``
-    in ``folder`` (with its mesh.h5); ValueError naming the file if one cannot be read."""
+    in ``folder`` (with its mesh.h5), symmetric tensors back to their 9 components;
+    ValueError naming the file if one cannot be read."""
     h5py = require_h5py()
     arrays: list[dict[str, np.ndarray]] = []
     for name in (MESH_FILE, step_file):
@@ -93,7 +117,14 @@ def read_step(
                     arrays.append({key: handle[key][()] for key in ("points", "triangles")})
                 else:
                     for group in ("point", "cell"):
-                        arrays.append({key: value[()] for key, value in handle[group].items()})
+                        arrays.append(
+                            {
+                                key: value[()][:, _FULL]
+                                if value.attrs.get("symmetric_tensor")
+                                else value[()]
+                                for key, value in handle[group].items()
+                            }
+                        )
         except (OSError, KeyError) as error:
             raise ValueError(f"{path}: cannot read it ({error})") from None
     mesh, point, cell = arrays
@@ -128,11 +159,11 @@ def read_layout(path: str | os.PathLike) -> list[tuple[str, str, tuple[int, ...]
 
 
 def _attribute(shape: tuple[int, ...]) -> str:
-    """The XDMF AttributeType of a field of this shape: Scalar (n,), Vector (n, 3), Tensor
-    (n, 9), else Matrix."""
+    """The XDMF AttributeType of a field of this shape: Scalar (n,), Vector (n, 3), Tensor6
+    (n, 6, the upper triangle of a symmetric tensor), Tensor (n, 9), else Matrix."""
     if len(shape) == 1:
         return "Scalar"
-    return {3: "Vector", 9: "Tensor"}.get(shape[1], "Matrix")
+    return {3: "Vector", 6: "Tensor6", 9: "Tensor"}.get(shape[1], "Matrix")
 
 
 def _data_item(shape: tuple[int, ...], dtype: np.dtype, reference: str) -> str:
