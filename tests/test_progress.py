@@ -115,3 +115,15 @@ def test_listeners_hear_every_iteration_of_a_solve_and_only_within_the_block():
     model.solve(steps=1)
     assert len(heard) == count
     assert np.isfinite([r for _, _, r in heard]).all()
+
+
+def test_a_staged_run_names_the_analysis_step_of_each_line():
+    """With [[step]] tables (``staged``) each step's line says its analysis step."""
+    stream = Stream(False)
+    progress = Progress(stream, clock=Clock())
+    progress.staged = True
+    progress.step(SimpleNamespace(**vars(step(1.0)), analysis_step=1))
+    progress.step(SimpleNamespace(**vars(step(0.5)), analysis_step=2))
+    lines = stream.getvalue().splitlines()
+    assert lines[0].startswith("step   1  analysis step 1  load factor  1.0000")
+    assert lines[1].startswith("step   2  analysis step 2  load factor  0.5000")

@@ -51,6 +51,8 @@ from wrinkle.selectors import evaluate_expression, select_nodes
 from wrinkle.solvers import LINEAR_SOLVERS, SOLVERS, ConvergenceError, SolverSettings
 from wrinkle.solvers.settings import CONTROLS, CONVERGENCE_TESTS
 from wrinkle.solvers.stepping import Resume
+from wrinkle.staging import AnalysisStep, restart_point, solve_steps
+from wrinkle.system import StepStart
 from wrinkle.xdmf import require_h5py
 
 FORM_MESH = "formfound.msh"  # the found mesh, in the output folder of a [formfinding] case
@@ -92,11 +94,11 @@ GENERATORS: dict[str, tuple[Callable[..., Mesh], tuple[str, ...]]] = {
     "cylinder": (cylinder, ("radius", "length", "n_circumferential", "n_axial", "n_cap")),
 }
 LOAD_KINDS = {
-    "pressure": ({"value"}, {"region"}),
-    "edge": ({"nodes"}, {"traction", "normal", "follow"}),
-    "nodal": ({"nodes", "force"}, set()),
-    "gravity": ({"acceleration", "density"}, {"region"}),
-    "gas": ({"ambient"}, {"p0", "amount", "gamma", "region"}),
+    "pressure": ({"value"}, {"region", "label"}),
+    "edge": ({"nodes"}, {"traction", "normal", "follow", "label"}),
+    "nodal": ({"nodes", "force"}, {"label"}),
+    "gravity": ({"acceleration", "density"}, {"region", "label"}),
+    "gas": ({"ambient"}, {"p0", "amount", "gamma", "region", "label"}),
 }
 SOLVER_KEYS = {
     "method",
@@ -115,6 +117,16 @@ SOLVER_KEYS = {
     "accuracy_energy",
     "accuracy_change",
     "control",
+    "volume_ratio",
+    "volume",
+    "stop",
+}
+# the [solver] keys a [[step]] may set for its own path (the others are for one path only)
+STEP_SOLVER_KEYS = SOLVER_KEYS - {
+    "nested",
+    "convergence",
+    "accuracy_energy",
+    "accuracy_change",
     "volume_ratio",
     "volume",
     "stop",
@@ -316,7 +328,9 @@ class Case:
     rebuild: the case's model made again on another mesh of the same elements (the found
     form), its loads with it or not, its selectors evaluated on the case's own mesh;
     selections: each selector text of the case and the nodes it picks on the case's mesh,
-    written into formfound.msh as node sets of those names.
+    written into formfound.msh as node sets of those names; output: the [output] table;
+    steps: the analysis steps of its [[step]] tables (``wrinkle.staging``), solved in
+    turn (none: one proportional path).
     """
 
     model: Model
@@ -333,6 +347,7 @@ class Case:
     rebuild: Callable[[Mesh, bool], Model] | None = None
     selections: dict[str, np.ndarray] = field(default_factory=dict)
     output: OutputSettings = field(default_factory=OutputSettings)
+    steps: list[AnalysisStep] = field(default_factory=list)
 
     def _label(self, results: Results | None) -> None:
         if results is not None:
@@ -341,15 +356,31 @@ class Case:
     def solve(self, on_step: Callable[[StepResult], None] | None = None, **options: Any) -> Results:
         """Solve the model with the case's settings (``options``: fields of
         ``SolverSettings`` overriding them); the results carry the case's probes and units.
-        Raises ConvergenceError (its ``results`` labelled the same) if a step fails."""
+        Raises ConvergenceError (its ``results`` labelled the same) if a step fails. With
+        analysis steps, their paths in turn (``wrinkle.staging.solve_steps``; ``restart``:
+        where to take up a staged run, ``restart_point``)."""
+        restart = options.pop("restart", None)
         try:
-            results = self.model.solve(
-                self.settings,
-                on_step=on_step,
-                coarse=self.coarse or None,
-                probes=self.probes,
-                **options,
-            )
+            if self.steps:
+                first, start, resume = restart if restart is not None else (0, None, None)
+                results = solve_steps(
+                    self.model,
+                    self.steps,
+                    on_step,
+                    self.probes,
+                    first,
+                    start,
+                    resume,
+                    **options,
+                )
+            else:
+                results = self.model.solve(
+                    self.settings,
+                    on_step=on_step,
+                    coarse=self.coarse or None,
+                    probes=self.probes,
+                    **options,
+                )
         except ConvergenceError as error:
             self._label(error.results)
             raise
@@ -398,7 +429,14 @@ class Case:
             model = self.rebuild(form.mesh, loads)
         except CaseError as error:
             raise CaseError(f"{error} (on the form-found mesh)") from None
-        analysis = replace(self, model=model, form_finding=None, coarse=[], level_names=[])
+        analysis = replace(
+            self,
+            model=model,
+            form_finding=None,
+            coarse=[],
+            level_names=[],
+            steps=self.steps if loads else [],
+        )
         path = Path(out)
         path.mkdir(parents=True, exist_ok=True)
         found = replace(form.mesh, node_sets={**self.selections, **form.mesh.node_sets})
@@ -421,7 +459,8 @@ class Case:
         converged step, the one before it and the increment the step controller (with the
         case's settings and ``options``) takes next, so that the run goes on as it would
         have (``wrinkle.solvers.stepping.Resume``); None if ``out`` has no converged step.
-        CaseError if that run reached load factor 1 already, or its mesh is not the case's."""
+        CaseError if that run reached load factor 1 already, or its mesh is not the case's.
+        (A case with analysis steps continues by ``wrinkle.staging.restart_point``.)"""
         folder = Path(out)
         if not (folder / SUMMARY).is_file():
             return None
@@ -431,36 +470,39 @@ class Case:
                 f"--restart: {self.source}: only a load-controlled path without a stop or gas "
                 "load can be continued (solver control = 'load')"
             )
+        point = self._staged_restart(out, [AnalysisStep("the path", settings=settings)])
+        return None if point is None else point[2]
+
+    def _staged_restart(
+        self, out: str | os.PathLike, steps: list[AnalysisStep], **options: Any
+    ) -> tuple[int, StepStart | None, Resume | None] | None:
+        """Where a run of the analysis ``steps`` (one step: a single path) continues from the
+        results in ``out`` (``wrinkle.staging.restart_point``); None if there are none.
+        CaseError if that run had ended, or is not readable or of another mesh."""
+        folder = Path(out)
+        if not (folder / SUMMARY).is_file():
+            return None
         try:
             saved = open_results(folder)
             if not saved.steps:
                 return None
-            last = saved.steps[-1]
-            factor = float(last["load_factor"])
-            if factor >= 1.0 - 1e-12:
-                raise CaseError(
-                    f"--restart: {folder / SUMMARY}: that run reached load factor 1: "
-                    "nothing to continue"
-                )
-            u = saved.displacement(-1)
-            if u.size != self.model.n_dofs:
-                raise CaseError(
-                    f"--restart: {folder / last['file']}: a mesh of {u.size // 3} nodes, not "
-                    f"the case's {self.model.mesh.n_nodes}"
-                )
-            if len(saved.steps) > 1:
-                previous = (float(saved.steps[-2]["load_factor"]), saved.displacement(-2))
-            else:
-                previous = (0.0, np.zeros(self.model.n_dofs))
+
+            def displacement(index: int) -> np.ndarray:
+                u = saved.displacement(index)
+                if u.size != self.model.n_dofs:
+                    raise CaseError(
+                        f"--restart: {folder / saved.steps[index]['file']}: a mesh of "
+                        f"{u.size // 3} nodes, not the case's {self.model.mesh.n_nodes}"
+                    )
+                return u
+
+            return restart_point(self.model, steps, saved.steps, displacement, **options)
         except (OSError, KeyError, TypeError) as error:
             raise CaseError(f"--restart: {folder}: not readable ({error})") from None
         except ValueError as error:
             if isinstance(error, CaseError):
                 raise
-            raise CaseError(f"--restart: {error}") from None
-        controller = settings.controller()
-        increment = controller.after_success(factor - previous[0], int(last["iterations"]))
-        return Resume(factor, u, previous, increment)
+            raise CaseError(f"--restart: {folder / SUMMARY}: {error}") from None
 
     def find_form(self) -> FormFinding:
         """The form of the case's model by its [formfinding] settings (default ones
@@ -487,7 +529,11 @@ class Case:
         restart: bool = False,
         **options: Any,
     ) -> Results:
-        resume = self.resume_from(out, **options) if restart else None
+        resume = point = None
+        if restart and self.steps:
+            point = self._staged_restart(out, self.steps, **options)
+        elif restart:
+            resume = self.resume_from(out, **options)
         try:
             writer = ResultWriter(
                 out,
@@ -495,15 +541,18 @@ class Case:
                 probes=self.probes,
                 units=self.units,
                 case=self.source,
-                resume=resume is not None,
+                resume=resume is not None or point is not None,
                 file_format=self.output.file_format,
                 fields=self.output.fields,
                 precision=self.output.precision,
+                analysis_steps=[step.name for step in self.steps] or None,
             )
         except ValueError as error:  # a folder of another case's run
             raise CaseError(f"--restart: {error}") from None
         if resume is not None:
             options["resume"] = resume
+        if point is not None:
+            options["restart"] = point
         writer.form_finding = form_finding
 
         def write(step: StepResult) -> None:
@@ -562,6 +611,7 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
             "modes",
             "formfinding",
             "output",
+            "step",
         },
     )
 
@@ -598,12 +648,14 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
             + (", ".join(probes) or "none")
             + ")",
         )
+    steps = _read_steps(reader, data, model, settings) if "step" in data else []
     coarse, level_names = [], []
     if level_files and settings.nested is False:
         reader.fail(
             "[mesh]", "'levels' are the meshes of [solver] nested: set nested = true to use them"
         )
     nests = settings.nests(bool(level_files), times > 0, bool(np.any(model.bending > 0)))
+    nests = nests and not steps  # (a staged analysis starts from the reference state)
     if settings.convergence == "accuracy" and not nests:
         reader.fail(
             "[solver]",
@@ -678,6 +730,7 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
         rebuild,
         selections,
         _read_output(reader, data["output"]) if "output" in data else OutputSettings(),
+        steps,
     )
 
 
@@ -701,7 +754,7 @@ def _read_model(reader: _Reader, data: dict, mesh: Mesh, loads: bool = True) -> 
     for index, table in enumerate(supports):
         _read_support(reader, model, table, f"[[support]] {index + 1}")
     for index, table in enumerate(reader.tables(data, "load") if loads else []):
-        _read_load(reader, model, table, f"[[load]] {index + 1}")
+        _read_load(reader, model, table, index + 1)
     for index, table in enumerate(reader.tables(data, "cable")):
         _read_cable(reader, model, table, f"[[cable]] {index + 1}")
     try:
@@ -955,21 +1008,29 @@ def _read_support(reader: _Reader, model: Model, table: dict, where: str) -> Non
     model.prescribe(nodes, values, label=label, moment_about=point)
 
 
-def _read_load(reader: _Reader, model: Model, table: dict, where: str) -> None:
+def _read_load(reader: _Reader, model: Model, table: dict, index: int) -> None:
+    """The [[load]] table number ``index`` (from 1), labelled by its ``label`` or "load
+    <index>"."""
+    where = f"[[load]] {index}"
     if "kind" not in table:
         reader.fail(where, "missing key 'kind' (one of " + ", ".join(LOAD_KINDS) + ")")
     kind = reader.choice(table, "kind", where, LOAD_KINDS)
     required, optional = LOAD_KINDS[kind]
     reader.keys(table, where, required | {"kind"}, optional)
     mesh = model.mesh
+    label = reader.string(table, "label", where) if "label" in table else f"load {index}"
     try:
         if kind == "pressure":
             model.add_pressure(
-                reader.number(table, "value", where), reader.elements(mesh, table, where)
+                reader.number(table, "value", where),
+                reader.elements(mesh, table, where),
+                label=label,
             )
         elif kind == "nodal":
             model.add_nodal_force(
-                reader.nodes(mesh, table, where), reader.vector(table, "force", where)
+                reader.nodes(mesh, table, where),
+                reader.vector(table, "force", where),
+                label=label,
             )
         elif kind == "gas":
             values = {
@@ -977,12 +1038,13 @@ def _read_load(reader: _Reader, model: Model, table: dict, where: str) -> None:
                 for key in ("ambient", "p0", "amount", "gamma")
                 if key in table
             }
-            model.add_gas(Gas(**values), reader.elements(mesh, table, where))
+            model.add_gas(Gas(**values), reader.elements(mesh, table, where), label=label)
         elif kind == "gravity":
             model.add_gravity(
                 reader.vector(table, "acceleration", where),
                 reader.number(table, "density", where, positive=True),
                 reader.elements(mesh, table, where),
+                label=label,
             )
         else:
             if ("traction" in table) == ("normal" in table):
@@ -997,6 +1059,7 @@ def _read_load(reader: _Reader, model: Model, table: dict, where: str) -> None:
                 traction=reader.vector(table, "traction", where) if "traction" in table else None,
                 normal=reader.number(table, "normal", where) if "normal" in table else None,
                 follow=follow,
+                label=label,
             )
     except CaseError:
         raise
@@ -1079,8 +1142,74 @@ def _read_modes(reader: _Reader, table: dict, model: Model) -> ModeSettings:
     return ModeSettings(count, mass, shift)
 
 
-def _read_solver(reader: _Reader, table: dict) -> SolverSettings:
-    where = "[solver]"
+def _read_steps(
+    reader: _Reader, data: dict, model: Model, settings: SolverSettings
+) -> list[AnalysisStep]:
+    """The [[step]] tables: each an optional ``name``, the ``loads`` and ``supports`` (lists
+    of labels) that grow in it and its own solver keys (``STEP_SOLVER_KEYS``, over
+    [solver]). Every load, and every support that prescribes a displacement, must grow in
+    one step, and only in one."""
+    tables = reader.tables(data, "step")
+    if settings.stop is not None or settings.control == "volume" or model.gas is not None:
+        what = (
+            "a gas load"
+            if model.gas is not None
+            else "[solver] " + ("'stop'" if settings.stop is not None else "control = 'volume'")
+        )
+        reader.fail("[[step]]", f"{what} is solved in one proportional path, without [[step]]")
+    if settings.nested is True or settings.convergence == "accuracy":
+        reader.fail("[[step]]", "[solver] nested and convergence = 'accuracy' are for one path")
+    solver = data.get("solver", {})
+    supports = list(dict.fromkeys(s.label for s in model.supports))
+    named: dict[tuple[str, str], str] = {}  # (kind, label) -> the step that names it
+    steps = []
+    for index, table in enumerate(tables):
+        where = f"[[step]] {index + 1}"
+        if not isinstance(table, dict):
+            reader.fail(where, "must be a table")
+        reader.keys(table, where, set(), {"name", "loads", "supports", *STEP_SOLVER_KEYS})
+        name = reader.string(table, "name", where) if "name" in table else f"step {index + 1}"
+        labels: dict[str, list[str]] = {}
+        for key, known in (("loads", model.load_labels), ("supports", supports)):
+            values = table.get(key, [])
+            if not isinstance(values, list) or not all(isinstance(v, str) for v in values):
+                reader.fail(where, f"'{key}' must be a list of labels, got {values!r}")
+            for label in values:
+                if label not in known:
+                    choices = ", ".join(repr(k) for k in known) or "none"
+                    reader.fail(where, f"'{key}': no {key[:-1]} is labelled {label!r} ({choices})")
+                if (key, label) in named:
+                    reader.fail(
+                        where,
+                        f"'{key}': {label!r} grew in {named[(key, label)]} already (a load or "
+                        "support reaches its value in one step)",
+                    )
+                named[(key, label)] = where
+            labels[key] = list(values)
+        if not labels["loads"] and not labels["supports"]:
+            reader.fail(where, "names no load and no support to grow ('loads', 'supports')")
+        own = {key: table[key] for key in STEP_SOLVER_KEYS if key in table}
+        if own.get("control") == "volume":
+            reader.fail(where, "control = 'volume' is solved in one path, without [[step]]")
+        settings_of_step = _read_solver(reader, {**solver, **own}, where)
+        steps.append(
+            AnalysisStep(name, tuple(labels["loads"]), tuple(labels["supports"]), settings_of_step)
+        )
+    for label in model.load_labels:
+        if ("loads", label) not in named:
+            reader.fail("[[step]]", f"load {label!r} grows in no step: name it in 'loads'")
+    for support in model.supports:
+        moving = np.any(model.prescribed[support.dofs])
+        if moving and ("supports", support.label) not in named:
+            reader.fail(
+                "[[step]]",
+                f"support {support.label!r} prescribes a displacement but moves in no step: "
+                "name it in 'supports'",
+            )
+    return steps
+
+
+def _read_solver(reader: _Reader, table: dict, where: str = "[solver]") -> SolverSettings:
     if not isinstance(table, dict):
         reader.fail(where, "must be a table")
     reader.keys(table, where, set(), SOLVER_KEYS)

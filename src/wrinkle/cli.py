@@ -53,6 +53,7 @@ def _run(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out {out}: is a file, not a folder for the results")
     progress = Progress(quiet=args.quiet)
+    progress.staged = bool(case.steps)
     try:
         restart = getattr(args, "restart", False)
         if restart and (out / SUMMARY).is_file():  # number the new steps after the old

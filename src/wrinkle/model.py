@@ -54,10 +54,10 @@ from wrinkle.solvers.control import (
 )
 from wrinkle.solvers.settings import ARC_LENGTH_STEPS, SolverSettings
 from wrinkle.solvers.stepping import Resume, follow_load_path
-from wrinkle.system import DiscreteSystem, FollowerEdgeLoad, Loading
+from wrinkle.system import DiscreteSystem, FollowerEdgeLoad, Loading, LoadState, StepStart
 from wrinkle.wrinkling import Wrinkling
 
-__all__ = ["COMPONENTS", "Model", "Support"]
+__all__ = ["COMPONENTS", "Model", "StepStart", "Support"]
 
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
 
@@ -146,6 +146,10 @@ class Model:
         self.pressure = np.zeros(n)  # follower pressure at full load, per element
         self.gas: Gas | None = None  # a gas load (add_gas): its pressure on the elements above
         self._edge_follower: list[FollowerEdgeLoad] = []
+        # each load's contributions by its label, for analysis steps (``load_state``): dead
+        # forces (dofs, values), pressures (elements, values), follower edge loads
+        self._load_parts: dict[str, list[tuple[str, Any, Any]]] = {}
+        self._load_count = 0
         self.cables: list[Cable] = []  # the cables (add_cables)
         self.bending = np.zeros(n)  # bending stiffness D per element (add_bending)
         self.density = np.full(n, np.nan)  # mass per unit volume per element (assign_material)
@@ -339,25 +343,53 @@ class Model:
         self.prescribed[dofs[set_]] = values[set_]
         self._add_support(chosen, dofs[set_], label, moment_about)
 
-    def add_nodal_force(self, nodes: NodeSelection, force: ArrayLike) -> None:
-        """Add a dead nodal force (3,) or (k, 3), reached at load factor 1."""
+    def _load_part(self, label: str | None) -> list[tuple[str, Any, Any]]:
+        """The contributions of the load labelled ``label`` (default "load N", N counting
+        the loads added), to which a new load adds its own."""
+        self._load_count += 1
+        name = f"load {self._load_count}" if label is None else str(label)
+        return self._load_parts.setdefault(name, [])
+
+    def _add_forces(self, dofs: np.ndarray, values: np.ndarray, label: str | None) -> None:
+        """Add dead forces ``values`` at the components ``dofs`` (same shape) as a load."""
+        dofs, values = np.asarray(dofs).ravel(), np.asarray(values, dtype=float).ravel()
+        np.add.at(self.forces, dofs, values)
+        self._load_part(label).append(("forces", dofs.copy(), values.copy()))
+        self._changed()
+
+    @property
+    def load_labels(self) -> list[str]:
+        """The labels of the loads, in the order they were first added."""
+        return list(self._load_parts)
+
+    def add_nodal_force(
+        self, nodes: NodeSelection, force: ArrayLike, label: str | None = None
+    ) -> None:
+        """Add a dead nodal force (3,) or (k, 3), reached at load factor 1. label: the
+        load's name for analysis steps (``solve(loads=...)``; default "load N")."""
         chosen = self._node_indices(nodes)
         values = np.broadcast_to(np.asarray(force, dtype=float), (chosen.size, 3))
         if not np.all(np.isfinite(values)):
             raise ValueError("nodal force must be finite")
-        np.add.at(self.forces, DOFS_PER_NODE * chosen[:, None] + np.arange(3), values)
-        self._changed()
+        self._add_forces(DOFS_PER_NODE * chosen[:, None] + np.arange(3), values, label)
 
-    def set_nodal_forces(self, forces: ArrayLike) -> None:
+    def set_nodal_forces(self, forces: ArrayLike, label: str = "nodal forces") -> None:
         """Replace all dead nodal forces at load factor 1 (those of ``add_nodal_force``, dead
-        edge loads and gravity) by ``forces``, (n_dofs,) or (n_nodes, 3)."""
+        edge loads and gravity) by ``forces``, (n_dofs,) or (n_nodes, 3), one load labelled
+        ``label``."""
         values = np.asarray(forces, dtype=float).reshape(-1)
         if values.shape != self.forces.shape:
             raise ValueError(f"nodal forces must have {self.n_dofs} components, got {values.size}")
         if not np.all(np.isfinite(values)):
             raise ValueError("nodal force must be finite")
-        self.forces[:] = values
-        self._changed()
+        for name in list(self._load_parts):
+            kept = [part for part in self._load_parts[name] if part[0] != "forces"]
+            if kept:
+                self._load_parts[name] = kept
+            else:
+                del self._load_parts[name]
+        self.forces[:] = 0.0
+        self._add_forces(np.arange(self.n_dofs), values, label)
 
     def set_prescribed(self, nodes: NodeSelection, displacement: ArrayLike) -> None:
         """Change the values at load factor 1 of components already held (by ``fix`` or
@@ -376,14 +408,19 @@ class Model:
         self.prescribed[dofs[given]] = values[given]
         self._changed()
 
-    def add_pressure(self, value: float, elements: ElementSelection = None) -> None:
+    def add_pressure(
+        self, value: float, elements: ElementSelection = None, label: str | None = None
+    ) -> None:
         """Follower pressure (force per unit current area) on ``elements`` (None = all),
-        positive along the element normal (x2 - x1) x (x3 - x1), reached at load factor 1."""
+        positive along the element normal (x2 - x1) x (x3 - x1), reached at load factor 1;
+        label as for ``add_nodal_force``."""
         if not np.isfinite(value):
             raise ValueError("pressure must be finite")
         if self.gas is not None:
             raise ValueError("a model with a gas load can have no other pressure load")
-        self.pressure[self._element_indices(elements)] += value
+        chosen = self._element_indices(elements)
+        self.pressure[chosen] += value
+        self._load_part(label).append(("pressure", chosen.copy(), float(value)))
         self._changed()
 
     def add_cables(
@@ -421,14 +458,18 @@ class Model:
             return None
         return Cables.of(self.cables, self.mesh.nodes)
 
-    def add_gas(self, gas: Gas, elements: ElementSelection = None) -> None:
+    def add_gas(
+        self, gas: Gas, elements: ElementSelection = None, label: str | None = None
+    ) -> None:
         """An enclosed gas (``wrinkle.gas.Gas``) on ``elements`` (None = all): its gauge
         pressure, set by the volume they enclose, acts along the element normals as a
         follower pressure does. One gas load per model, and no other pressure load; solved
         under load control, the load factor pumping the gas in."""
         if self.gas is not None or np.any(self.pressure):
             raise ValueError("a model has at most one gas load and then no other pressure load")
-        self.pressure[self._element_indices(elements)] = 1.0  # the gauge pressure's factor
+        chosen = self._element_indices(elements)
+        self.pressure[chosen] = 1.0  # the gauge pressure's factor
+        self._load_part(label).append(("pressure", chosen.copy(), 1.0))
         self.gas = gas
         self._changed()
 
@@ -473,10 +514,15 @@ class Model:
         self._changed()
 
     def add_gravity(
-        self, acceleration: ArrayLike, density: float, elements: ElementSelection = None
+        self,
+        acceleration: ArrayLike,
+        density: float,
+        elements: ElementSelection = None,
+        label: str | None = None,
     ) -> None:
         """Dead weight density * reference thickness * A0 * acceleration, a third to each
-        node; acceleration (3,) (length / time^2), density mass per unit volume."""
+        node; acceleration (3,) (length / time^2), density mass per unit volume; label as
+        for ``add_nodal_force``."""
         if not density > 0:
             raise ValueError(f"density must be > 0, got {density}")
         chosen = self._element_indices(elements)
@@ -485,9 +531,9 @@ class Model:
         ]
         area = self._reference_geometry().area[chosen]
         weight = (density * thickness * area / 3.0)[:, None] * np.asarray(acceleration, float)
-        for k in range(3):
-            np.add.at(self.forces.reshape(-1, 3), self.mesh.triangles[chosen, k], weight)
-        self._changed()
+        triangles = self.mesh.triangles[chosen]
+        dofs = DOFS_PER_NODE * triangles[:, :, None] + np.arange(3)  # (k, 3 nodes, 3)
+        self._add_forces(dofs, np.broadcast_to(weight[:, None, :], dofs.shape), label)
 
     def add_edge_load(
         self,
@@ -495,8 +541,10 @@ class Model:
         traction: ArrayLike | None = None,
         normal: float | None = None,
         follow: bool = False,
+        label: str | None = None,
     ) -> None:
-        """Load on the boundary edges whose two nodes are both in ``nodes``.
+        """Load on the boundary edges whose two nodes are both in ``nodes``; label as for
+        ``add_nodal_force``.
 
         traction: (3,) dead force per unit reference length; normal: force per unit length
         along the edge's outward normal in the membrane plane, positive pulling outwards (dead:
@@ -519,9 +567,11 @@ class Model:
             # place of the edge's nodes (a, b, third) in their triangle's dofs, for the stiffness
             position = np.argmax(self.mesh.triangles[owner][:, None, :] == triples[:, :, None], 2)
             dofs = (3 * position[:, :, None] + np.arange(3)).reshape(-1, 9)
-            self._edge_follower.append(
-                FollowerEdgeLoad(triples, np.full(triples.shape[0], float(normal)), owner, dofs)
+            edge_load = FollowerEdgeLoad(
+                triples, np.full(triples.shape[0], float(normal)), owner, dofs
             )
+            self._edge_follower.append(edge_load)
+            self._load_part(label).append(("edges", edge_load, None))
             self._changed()
             return
         if normal is not None:
@@ -530,14 +580,68 @@ class Model:
         else:
             traction = np.broadcast_to(np.asarray(traction, dtype=float), (triples.shape[0], 3))
             forces = edge_dead_forces(length, traction)
-        for k in range(2):
-            np.add.at(self.forces.reshape(-1, 3), triples[:, k], forces[:, 3 * k : 3 * k + 3])
-        self._changed()
+        dofs = DOFS_PER_NODE * triples[:, :2, None] + np.arange(3)  # (m, 2 nodes, 3)
+        self._add_forces(dofs, forces.reshape(-1, 2, 3), label)
 
     @property
     def has_follower_loads(self) -> bool:
         """Whether a load follows the deformation (pressure, following edge loads)."""
         return bool(np.any(self.pressure != 0) or self._edge_follower)
+
+    def _loading_of(self, label: str) -> Loading:
+        """The ``Loading`` at load factor 1 of the loads labelled ``label``."""
+        forces, pressure = np.zeros(self.n_dofs), np.zeros(self.mesh.n_elements)
+        edges: list[FollowerEdgeLoad] = []
+        for kind, where, values in self._load_parts[label]:
+            if kind == "forces":
+                np.add.at(forces, where, values)
+            elif kind == "pressure":
+                pressure[where] += values
+            else:
+                edges.append(where)
+        return Loading(forces, pressure, edges)
+
+    def load_state(
+        self,
+        loads: Sequence[str] | None = None,
+        supports: Sequence[str] | None = None,
+        start: StepStart | None = None,
+    ) -> LoadState:
+        """The loads and supported values at the end of an analysis step from ``start``
+        (None: the reference state, all loads zero) in which the loads labelled ``loads``
+        and the supports labelled ``supports`` reach their values as the model has them now
+        (None for both: every load and support); the others keep their values at the start.
+        A component held now but free at the start keeps its displacement there. ValueError
+        naming an unknown label."""
+        if loads is None and supports is None:
+            loads, supports = self.load_labels, [s.label for s in self.supports]
+        loads, supports = list(loads or ()), list(supports or ())
+        for label in loads:
+            if label not in self._load_parts:
+                known = ", ".join(repr(name) for name in self._load_parts) or "none"
+                raise ValueError(f"no load is labelled {label!r} (loads: {known})")
+        labels = {s.label for s in self.supports}
+        for label in supports:
+            if label not in labels:
+                known = ", ".join(repr(name) for name in dict.fromkeys(labels)) or "none"
+                raise ValueError(f"no support is labelled {label!r} (supports: {known})")
+        parts = dict(start.state.parts) if start is not None else {}
+        parts.update({label: self._loading_of(label) for label in loads})
+        prescribed = self._start_prescribed(start)
+        for support in self.supports:
+            if support.label in supports:
+                prescribed[support.dofs] = self.prescribed[support.dofs]
+        moved = frozenset(supports) | (start.state.supports if start is not None else frozenset())
+        return LoadState(parts, self.constrained.copy(), prescribed, moved)
+
+    def _start_prescribed(self, start: StepStart | None) -> np.ndarray:
+        """The supported values at the start of an analysis step, (n_dofs,): zero from the
+        reference state; else those at ``start`` where it held them, its displacement
+        elsewhere."""
+        if start is None:
+            return np.zeros(self.n_dofs)
+        held = start.state.constrained
+        return np.where(held, start.state.prescribed, start.displacement).astype(float)
 
     def support_reactions(self, reactions: np.ndarray) -> dict[str, list[float]]:
         """Sum of the reactions (n_dofs,) over the dofs each support holds (supports with the
@@ -680,7 +784,7 @@ class Model:
                 system, solver, controller, constraint_at, record, u0, 0.0, timer, stop
             )
         if control == "arc-length":
-            if np.any(system.prescribed[system.constrained]):
+            if system.moves_supports:
                 raise ValueError(
                     "solver control = 'arc-length': the loads alone may follow the load factor; "
                     "the model prescribes displacements (use control = 'load')"
@@ -779,9 +883,13 @@ class Model:
         coarse: Sequence[Model] | None = None,
         probes: Mapping[str, np.ndarray] | None = None,
         resume: Resume | None = None,
+        start: Results | StepStart | None = None,
+        loads: Sequence[str] | None = None,
+        supports: Sequence[str] | None = None,
         **options: Any,
     ) -> Results:
-        """Proportional stepping of loads and prescribed displacements from 0 to 1.
+        """Proportional stepping of loads and prescribed displacements from 0 to 1, or one
+        analysis step of a staged analysis.
 
         settings: ``SolverSettings`` (default: its defaults); options: any of its fields,
         overriding it (``steps=5``, ``method="restricted-step"``, ``tolerance=1e-8``, ...).
@@ -800,12 +908,30 @@ class Model:
         accuracy stop (``convergence="accuracy"``) on the finer levels of a nested first
         step. resume: continue the path from its last converged state instead
         (``wrinkle.solvers.stepping.Resume``, load control only; the results hold the new
-        steps). Raises
+        steps).
+
+        Analysis steps: ``start``, the results of the step before (or a ``StepStart``), and
+        ``loads`` and ``supports``, the labels of the loads and supports that grow in this
+        step, from their values at the start to their values in the model now (None for
+        both: all of them); the others keep their values at the start (zero from the
+        reference state), and the path starts from the displacement there. The load factor
+        of the results runs from 0 to 1 over the step, whose number (``analysis_step``) is
+        the start's plus one. Not with volume control, a gas load or a nested start.
+
+        Raises
         ConvergenceError, with the converged steps in its ``results`` attribute, if a step
-        cannot be solved; ValueError for a bad setting, unrestrained rigid-body motion or a
-        coarse model not coarser than the next or off its surface.
+        cannot be solved; ValueError for a bad setting, unrestrained rigid-body motion, a
+        coarse model not coarser than the next or off its surface, or an unknown label.
         """
         settings = (settings or SolverSettings()).replace(**options)
+        staged = start is not None or loads is not None or supports is not None
+        if staged and (self.gas is not None or settings.control == "volume"):
+            raise ValueError(
+                "analysis steps: a gas load or control = 'volume' is solved in one "
+                "proportional path (without [[step]], start, loads or supports)"
+            )
+        if staged and settings.nested is True:
+            raise ValueError("analysis steps: nested = true is for one proportional path only")
         if settings.convergence == "accuracy" and not coarse:
             raise ValueError(
                 "convergence = 'accuracy' needs the models of the coarser meshes (coarse=...): "
@@ -819,9 +945,29 @@ class Model:
         self.check_supports()
         system = self.discretise()
         system.check_resolvable()
-        results = Results(self)
+        if isinstance(start, Results):
+            start = start.step_start()
+        if start is not None and u0 is not None:
+            raise ValueError("give either u0 or start (whose displacement the step starts from)")
+        end = self.load_state(loads, supports, start)
+        if staged:
+            initial = (
+                Loading.total([], self.n_dofs, self.mesh.n_elements)
+                if start is None
+                else start.state.loading(self.mesh.n_elements)
+            )
+            system = system.along(
+                initial,
+                self._start_prescribed(start),
+                end.loading(self.mesh.n_elements),
+                end.prescribed,
+            )
+            if start is not None:
+                u0 = np.asarray(start.displacement, dtype=float).copy()
+        step_number = 1 if start is None else start.analysis_step + 1
+        results = Results(self, system, step_number, end)
         first_guess = None
-        if coarse and settings.nested is not False and u0 is None and resume is None:
+        if coarse and settings.nested is not False and u0 is None and resume is None and not staged:
             first_guess = NestedStart(coarse, self, settings, results.stopwatch, probes)
 
         pressure_unknown = self.gas is not None or settings.control == "volume"

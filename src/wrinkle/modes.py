@@ -47,6 +47,7 @@ from wrinkle.solvers.stability import UNSTABLE
 
 if TYPE_CHECKING:
     from wrinkle.model import Model
+    from wrinkle.system import DiscreteSystem
 
 __all__ = [
     "DEFAULT_MASS",
@@ -258,6 +259,7 @@ def natural_modes(
     mass: str = DEFAULT_MASS,
     shift: float | None = None,
     linear_solver: str = "auto",
+    system: DiscreteSystem | None = None,
 ) -> Modes:
     """The ``count`` lowest natural modes of ``model`` about the balanced state u (n_dofs,)
     at ``load_factor`` (and ``pressure_factor``, default the load factor), with the mass
@@ -266,7 +268,8 @@ def natural_modes(
     nearest omega^2 = sigma instead of the lowest. ValueError for an element without a
     density, a count outside 1 .. free components, a gas load (its stiffness is not in the
     tangent), an unstable state (an eigenvalue below -UNSTABLE lambda_scale) or a complex
-    eigenvalue."""
+    eigenvalue. system: the discrete system on whose path u lies (default the model's;
+    ``Results.system_of``)."""
     if mass not in MASS_KINDS:
         raise ValueError(f"unknown mass '{mass}' (one of {', '.join(MASS_KINDS)})")
     if model.gas is not None:
@@ -276,7 +279,7 @@ def natural_modes(
         )
     if isinstance(count, bool) or int(count) != count:
         raise ValueError(f"mode count must be an integer, got {count!r}")
-    system = model.discretise()
+    system = model.discretise() if system is None else system
     free = ~system.constrained
     n_free = int(np.count_nonzero(free))
     if not 1 <= count <= n_free:

@@ -17,7 +17,8 @@
   open ``results.pvd`` and apply the "Warp By Vector" filter with the vectors
   ``displacement`` (scale factor 1) to see the deformed membrane; colour by ``state`` and
   add "Glyph" on ``tension_direction`` for the tension field.
-- ``results.pvd``: a ParaView collection of the converged steps, timestep = load factor.
+- ``results.pvd``: a ParaView collection of the converged steps, timestep = load factor (in
+  a staged run, ``analysis_steps``: the total time, analysis step - 1 + load factor).
 - with ``file_format="xdmf"`` (``[output] format``) instead of the .vtu files and
   results.pvd: ``mesh.h5`` once, ``step_0001.h5``, ... and ``results.xdmf``
   (``wrinkle.xdmf``), the same fields (the symmetric tensors as their six components);
@@ -37,7 +38,9 @@
   "position"}, and "moments" {label: [Mx, My, Mz]} for supports with ``moment_about``}],
   "wall_time" (seconds since the writer was made), "reference_volume" where the membrane
   encloses a volume, the last step's "strain_energy", "external_work" and
-  "enclosed_volume", and "units" and "case" if given}.
+  "enclosed_volume", and "units" and "case" if given}. A staged run (``analysis_steps``,
+  the names of its ``[[step]]`` tables) adds "analysis_steps" and, to each step,
+  "analysis_step" (from 1) and "time", which history.csv has after load_factor.
 - with ``write_modes`` (a case's ``[modes]``): ``mode_01.vtu``, ``mode_02.vtu``, ...: the
   mesh in the reference configuration with point data ``displacement`` (the state the modes
   are about) and ``mode`` (the mode shape, scaled to a largest nodal amplitude of 1, length
@@ -240,8 +243,10 @@ class ResultWriter:
         file_format: str = "vtu",
         fields: Sequence[str] | None = None,
         precision: str = "double",
+        analysis_steps: Sequence[str] | None = None,
     ):
         self._start = time.perf_counter()
+        self.analysis_steps = None if analysis_steps is None else [str(n) for n in analysis_steps]
         if precision not in PRECISIONS:
             raise ValueError(f"output precision {precision!r}: one of {', '.join(PRECISIONS)}")
         self.precision = precision
@@ -381,6 +386,7 @@ class ResultWriter:
             "step": index,
             "file": name,
             "load_factor": float(step.load_factor),
+            **self._stage_keys(step),
             "iterations": int(step.iterations),
             "residual": float(step.residual),
             "states": dict(zip(STATE_NAMES, states)),
@@ -409,7 +415,8 @@ class ResultWriter:
         if cables is not None and self.system is not None and self.system.cables is not None:
             entry["cables"] = self.system.cables.summary(cables.axial, cables.taut)
         self.steps.append(entry)
-        row: list = [index, float(step.load_factor), int(step.iterations), float(step.residual)]
+        row: list = [index, float(step.load_factor), *self._stage_keys(step).values()]
+        row += [int(step.iterations), float(step.residual)]
         row += extra
         row += states
         row += [quantities[key] for key in ("strain_energy", "external_work")]
@@ -426,6 +433,14 @@ class ResultWriter:
         self._write_history()
         self._write_summary(False, "running")
         return path
+
+    def _stage_keys(self, step) -> dict[str, int | float]:
+        """A staged run's "analysis_step" (its number, from 1) and "time" (the number minus
+        1 plus the load factor) of a step; none for a run of one path."""
+        if self.analysis_steps is None:
+            return {}
+        number = int(getattr(step, "analysis_step", 1))
+        return {"analysis_step": number, "time": number - 1 + float(step.load_factor)}
 
     def _quantities(self, u: np.ndarray, report: ElementReport, positions: np.ndarray) -> dict:
         """The step's "strain_energy" (``DiscreteSystem.strain_energy_and_forces``),
@@ -590,7 +605,7 @@ class ResultWriter:
         if self.file_format == "xdmf":
             mesh = self.model.mesh
             steps = [
-                (float(entry["load_factor"]), str(entry["file"]), fields)
+                (float(entry.get("time", entry["load_factor"])), str(entry["file"]), fields)
                 for entry, fields in zip(self.steps, self._layouts, strict=True)
             ]
             write_collection(
@@ -604,7 +619,7 @@ class ResultWriter:
         self._write_pvd(
             COLLECTION,
             [
-                f'    <DataSet timestep="{s["load_factor"]!r}" group="" part="0" '
+                f'    <DataSet timestep="{s.get("time", s["load_factor"])!r}" group="" part="0" '
                 f"file={quoteattr(s['file'])}/>"
                 for s in self.steps
             ],
@@ -625,7 +640,9 @@ class ResultWriter:
 
     def history_header(self) -> list[str]:
         """Column names of history.csv."""
-        header = ["step", "load_factor", "iterations", "residual"]
+        header = ["step", "load_factor"]
+        header += ["analysis_step", "time"] if self.analysis_steps is not None else []
+        header += ["iterations", "residual"]
         header += ["pressure"] if self.has_pressure else []
         header += ["enclosed_volume"] if self.has_volume else []
         header += STATE_NAMES
@@ -661,6 +678,8 @@ class ResultWriter:
             for key in ("strain_energy", "external_work", "enclosed_volume"):
                 if key in last:
                     summary[key] = last[key]
+        if self.analysis_steps is not None:
+            summary["analysis_steps"] = self.analysis_steps
         if self.form_finding is not None:
             summary["formfinding"] = self.form_finding
         if self.frequencies is not None:
@@ -692,6 +711,7 @@ def save_results(
     stopped (e.g. the partial ``results`` of a ConvergenceError); its wall time is the writing
     time. Returns ``out_dir`` as a Path.
     """
+    numbers = sorted({int(getattr(step, "analysis_step", 1)) for step in results.steps})
     writer = ResultWriter(
         out_dir,
         results.model,
@@ -701,6 +721,9 @@ def save_results(
         file_format=file_format,
         fields=fields,
         precision=precision,
+        analysis_steps=[f"step {k}" for k in range(1, numbers[-1] + 1)]
+        if numbers and numbers[-1] > 1
+        else None,
     )
     for step in results.steps:
         writer.write_step(step)

@@ -406,8 +406,10 @@ def _load_column(header: list[str], history: np.ndarray, load: str | None) -> tu
     has_pressure = "pressure" in header and bool(
         np.isfinite(history[:, header.index("pressure")]).any()
     )
-    if load is None:
-        load = "pressure" if has_pressure else "load_factor"
+    if load is None:  # a staged run's loads grow in turn: its total time by default
+        load = "pressure" if has_pressure and "time" not in header else "load_factor"
+    if load == "load_factor" and "time" in header:  # a staged run: its total time
+        return "time", "load_factor"
     if load == "load_factor" or (load == "pressure" and has_pressure):
         return load, load
     if load in supports:
@@ -430,6 +432,8 @@ def _load_label(column: str, kind: str, units: dict) -> str:
         return _with_unit("pressure", f"{force}/{length}²" if force and length else "")
     if kind == "force":
         return _with_unit(f"reaction {column[-2:]} of {column[:-3]!r}", force)
+    if column == "time":
+        return "analysis steps (step - 1 + load factor)"
     return "load factor"
 
 

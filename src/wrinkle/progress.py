@@ -40,6 +40,7 @@ class Progress:
         self.clock = clock
         self.terminal = bool(getattr(self.stream, "isatty", lambda: False)())
         self.count = 0
+        self.staged = False  # a run of [[step]] tables: each line names its analysis step
         self.start = clock()
         self.last_line = self.start  # when a line was last printed
         self.load_factor = 0.0  # of the last converged step
@@ -59,7 +60,9 @@ class Progress:
         pressure = getattr(step, "pressure", None)
         now = self.clock()
         text = (
-            f"step {self.count:3d}  load factor {step.load_factor:7.4f}  "
+            f"step {self.count:3d}  "
+            + (f"analysis step {getattr(step, 'analysis_step', 1)}  " if self.staged else "")
+            + f"load factor {step.load_factor:7.4f}  "
             + ("" if pressure is None else f"pressure {pressure:.4g}  ")
             + f"iterations {step.iterations:3d}  residual {step.residual:9.2e}  "
             f"wrinkled {wrinkled}  slack {slack}  ({now - self.start:.1f} s)"

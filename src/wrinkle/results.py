@@ -14,6 +14,7 @@ from wrinkle.modes import Modes, natural_modes
 from wrinkle.output import save_results
 from wrinkle.solvers.base import SolverResult
 from wrinkle.solvers.control import PathEnd
+from wrinkle.system import DiscreteSystem, LoadState, StepStart
 from wrinkle.timing import Stopwatch
 
 if TYPE_CHECKING:
@@ -34,7 +35,10 @@ class StepResult:
     and gas loads solve for; None without pressure); enclosed_volume: the volume the
     pressurised membrane encloses (``DiscreteSystem.enclosed_volume``), where it is closed
     or closed by symmetry planes, else None; residual_history: the residual norm (force) of
-    each iteration of the step's converged solve, the first at its start.
+    each iteration of the step's converged solve, the first at its start; analysis_step: the
+    number of the analysis step (``[[step]]``, from 1) whose path the load factor is on;
+    pressure_factor: the factor on its pressures (the load factor but under volume control
+    and gas loads).
     """
 
     load_factor: float
@@ -48,6 +52,14 @@ class StepResult:
     pressure: float | None = None
     enclosed_volume: float | None = None
     residual_history: tuple[float, ...] = ()
+    analysis_step: int = 1
+    pressure_factor: float | None = None
+
+    @property
+    def time(self) -> float:
+        """The total time of a staged analysis, each analysis step lasting 1: the analysis
+        step's number minus 1 plus the load factor (Abaqus's total time)."""
+        return self.analysis_step - 1 + self.load_factor
 
 
 class Results:
@@ -55,11 +67,25 @@ class Results:
 
     probes ({name: node indices}) and units ({"length": "m", ...}) go into the files that
     ``save`` writes; source: the case file the model came from, if any (``Case.solve`` sets
-    the three).
+    the three). system: the discrete system of the path solved (default the model's);
+    analysis_step: its number in a staged analysis; end_state: the loads and supported
+    values at its end (``Model.load_state``), where a next analysis step starts
+    (``step_start``). ``systems`` holds each analysis step's system by its number.
     """
 
-    def __init__(self, model: Model):
+    def __init__(
+        self,
+        model: Model,
+        system: DiscreteSystem | None = None,
+        analysis_step: int = 1,
+        end_state: LoadState | None = None,
+    ):
         self.model = model
+        self.analysis_step = analysis_step
+        self.end_state = end_state
+        self.systems: dict[int, DiscreteSystem] = {}
+        if system is not None:
+            self.systems[analysis_step] = system
         self.steps: list[StepResult] = []
         self.stopwatch = Stopwatch()
         self.probes: dict[str, np.ndarray] = {}
@@ -91,14 +117,18 @@ class Results:
         evaluation, at u, where it has them. pressure_factor: the factor on the pressure
         loads (default load_factor)."""
         ev = solved.evaluation
-        system = self.model.discretise()
+        system = self.system_of(self.analysis_step)
         reactions = ev.reactions
         if reactions is None:
             reactions = system.reactions(u, load_factor)
-        value = self.model.pressure_value
         factor = load_factor if pressure_factor is None else pressure_factor
+        value = None
+        if self.model.pressure_value is not None:  # at the element of the largest pressure
+            value = float(system.pressure_at(factor)[np.argmax(np.abs(self.model.pressure))])
+        # the volume of every element a pressure acts on in some analysis step: the model's
+        whole = self.model.discretise()
         if self._closed is None:
-            self._closed = value is not None and system.volume_closure() is None
+            self._closed = value is not None and whole.volume_closure() is None
         step = StepResult(
             load_factor,
             u.copy(),
@@ -108,9 +138,11 @@ class Results:
             ev.states,
             solved.stopped_by,
             solved.stop_report,
-            None if value is None else factor * value,
-            system.enclosed_volume(u) if self._closed else None,
+            value,
+            whole.enclosed_volume(u) if self._closed else None,
             tuple(float(r) for r in solved.residual_norms),
+            self.analysis_step,
+            factor,
         )
         self.steps.append(step)
         return step
@@ -144,6 +176,37 @@ class Results:
         """The last converged step."""
         return self.steps[-1]
 
+    def system_of(self, analysis_step: int) -> DiscreteSystem:
+        """The discrete system on whose path analysis step ``analysis_step`` was solved
+        (the model's own if it was not recorded)."""
+        return self.systems.get(analysis_step) or self.model.discretise()
+
+    def step_start(self) -> StepStart:
+        """Where the next analysis step starts (``Model.solve(start=...)``): the loads and
+        supported values at the end of this path and its last displacement. ValueError if
+        the path has no converged step or did not reach its end (load factor 1)."""
+        if not self.steps or abs(self.final.load_factor - 1.0) > 1e-12:
+            reached = self.final.load_factor if self.steps else 0.0
+            raise ValueError(
+                f"analysis steps: the step before ended at load factor {reached:.6g}, not 1: "
+                "the next one cannot start from it"
+            )
+        if self.end_state is None:
+            raise ValueError("analysis steps: these results do not record their loads")
+        return StepStart(self.end_state, self.final.displacement, self.analysis_step)
+
+    def extend(self, later: Results) -> None:
+        """Add the steps of a later analysis step's results (``Model.solve(start=...)``)
+        to these: its steps, its system, its end and its timings."""
+        self.steps += later.steps
+        self.systems.update(later.systems)
+        self.analysis_step, self.end_state, self.end = (
+            later.analysis_step,
+            later.end_state,
+            later.end,
+        )
+        self.stopwatch.absorb(later.stopwatch)
+
     def modes(
         self,
         count: int,
@@ -157,19 +220,16 @@ class Results:
         there (``wrinkle.modes.natural_modes``, which says what ``mass`` and ``shift``
         mean). The model's materials need a density."""
         chosen = self.steps[step]
-        value = self.model.pressure_value
-        pressure_factor = (
-            None if value is None or chosen.pressure is None else chosen.pressure / value
-        )
         return natural_modes(
             self.model,
             chosen.displacement,
             count,
             load_factor=chosen.load_factor,
-            pressure_factor=pressure_factor,
+            pressure_factor=chosen.pressure_factor,
             mass=mass,
             shift=shift,
             linear_solver=linear_solver,
+            system=self.system_of(chosen.analysis_step),
         )
 
     def __len__(self) -> int:

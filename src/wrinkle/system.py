@@ -13,8 +13,9 @@ Units are consistent units; displacement vectors are (n_dofs,) = (3 n_nodes,), n
 
 from __future__ import annotations
 
+import copy
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -50,7 +51,9 @@ __all__ = [
     "MIN_VOLUME_RATIO",
     "DiscreteSystem",
     "FollowerEdgeLoad",
+    "LoadState",
     "Loading",
+    "StepStart",
     "StepProblem",
 ]
 
@@ -99,6 +102,49 @@ class Loading:
     def has_followers(self) -> bool:
         return bool(np.any(self.pressure != 0) or self.follower_edges)
 
+    @classmethod
+    def total(cls, parts: Sequence[Loading], n_dofs: int, n_elements: int) -> Loading:
+        """The sum of several loadings (zero loads if there are none)."""
+        forces, pressure = np.zeros(n_dofs), np.zeros(n_elements)
+        edges: list[FollowerEdgeLoad] = []
+        for part in parts:
+            forces += part.forces
+            pressure += part.pressure
+            edges += part.follower_edges
+        return cls(forces, pressure, edges)
+
+
+@dataclass(frozen=True)
+class LoadState:
+    """The loads and the supported values of a model at one instant of a staged analysis
+    (the end of an analysis step, ``Model.load_state``).
+
+    parts: {load label: its ``Loading`` as applied then} for the loads applied so far (a load
+    not in it is at zero); constrained (n_dofs,) bool and prescribed (n_dofs,) the held
+    components and their values then (displacements); supports: the labels of the supports
+    moved to their own values so far.
+    """
+
+    parts: Mapping[str, Loading]
+    constrained: np.ndarray
+    prescribed: np.ndarray
+    supports: frozenset[str] = frozenset()
+
+    def loading(self, n_elements: int) -> Loading:
+        """The sum of the applied loads (``Loading.total``)."""
+        return Loading.total(list(self.parts.values()), self.prescribed.size, n_elements)
+
+
+@dataclass(frozen=True)
+class StepStart:
+    """Where an analysis step starts: the loads and supported values there (``LoadState``),
+    the displacement there (n_dofs,) and the number of the analysis step that ended there
+    (0: the reference state)."""
+
+    state: LoadState
+    displacement: np.ndarray
+    analysis_step: int
+
 
 def _concatenate_results(results: list[ElementResult], inverse: np.ndarray) -> ElementResult:
     """Element results of several material groups in mesh order."""
@@ -141,6 +187,10 @@ class DiscreteSystem:
     (``wrinkle.cables``), if any, along mesh edges; bending: the bending energy of the mean
     surface (``wrinkle.bending``), if the model has one; the pattern must then hold the node
     pairs it couples.
+
+    The loads and supported values at load factor lambda are those at 1 times lambda, or,
+    on the path of an analysis step (``along``), L(lambda) = L0 + lambda (L1 - L0) from the
+    values L0 at its start to L1 = ``loading``, ``prescribed`` at its end.
     """
 
     def __init__(
@@ -200,6 +250,70 @@ class DiscreteSystem:
             self._bending_values = np.repeat(values, 3)
         self._constraint_data: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._motion_force_at_full: float | None = None
+        # the loads and supported values at load factor 0 (``along``): None, all zero
+        self.initial: Loading | None = None
+        self.initial_prescribed: np.ndarray | None = None
+        self._motion_reactions: tuple[np.ndarray, np.ndarray] | None = None  # at 0 and 1
+
+    def along(
+        self,
+        initial: Loading,
+        initial_prescribed: np.ndarray,
+        loading: Loading,
+        prescribed: np.ndarray,
+    ) -> DiscreteSystem:
+        """The same discrete system on the path of an analysis step: its loads and supported
+        values (n_dofs,) go from ``initial``, ``initial_prescribed`` at load factor 0 to
+        ``loading``, ``prescribed`` at 1, linearly. It shares the mesh, pattern, elements
+        and supports (``constrained``) of this one."""
+        path = copy.copy(self)
+        path.initial, path.initial_prescribed = initial, np.asarray(initial_prescribed, float)
+        path.loading, path.prescribed = loading, np.asarray(prescribed, dtype=float)
+        path._reference_volume = path._pressure_potential = path._motion_force_at_full = None
+        path._motion_reactions = None
+        return path
+
+    def forces_at(self, load_factor: float) -> np.ndarray:
+        """The dead nodal forces at ``load_factor``, (n_dofs,)."""
+        if self.initial is None:
+            return load_factor * self.loading.forces
+        start = self.initial.forces
+        return start + load_factor * (self.loading.forces - start)
+
+    def pressure_at(self, pressure_factor: float) -> np.ndarray:
+        """The follower pressure of each element at ``pressure_factor`` (the load factor, or
+        the unknown of volume control and gas loads), (n_elements,)."""
+        if self.initial is None:
+            return pressure_factor * self.loading.pressure
+        start = self.initial.pressure
+        return start + pressure_factor * (self.loading.pressure - start)
+
+    def prescribed_at(self, load_factor: float) -> np.ndarray:
+        """The values of the supported components at ``load_factor``, (n_dofs,)."""
+        if self.initial_prescribed is None:
+            return load_factor * self.prescribed
+        start = self.initial_prescribed
+        return start + load_factor * (self.prescribed - start)
+
+    def _edge_terms(self, load_factor: float) -> list[tuple[FollowerEdgeLoad, float]]:
+        """The follower edge loads at ``load_factor``, each with the factor on its values."""
+        terms = [(edge, load_factor) for edge in self.loading.follower_edges]
+        if self.initial is not None:
+            terms += [(edge, 1.0 - load_factor) for edge in self.initial.follower_edges]
+        return terms
+
+    @property
+    def has_follower_edges(self) -> bool:
+        """Whether follower edge loads act anywhere on the path (they have no potential)."""
+        return bool(self._edge_terms(0.5))
+
+    @property
+    def moves_supports(self) -> bool:
+        """Whether the supported values change along the path."""
+        end = self.prescribed[self.constrained]
+        if self.initial_prescribed is None:
+            return bool(np.any(end))
+        return bool(np.any(end != self.initial_prescribed[self.constrained]))
 
     @property
     def elements(self) -> MembraneElements:
@@ -210,7 +324,9 @@ class DiscreteSystem:
 
     @property
     def has_follower_loads(self) -> bool:
-        return self.loading.has_followers
+        return self.loading.has_followers or (
+            self.initial is not None and self.initial.has_followers
+        )
 
     def _force_round_off(self) -> float:
         """Residual norm that round-off alone can produce, force: 10 eps |dN/dE at C = I|
@@ -290,13 +406,30 @@ class DiscreteSystem:
             if self._motion_force_at_full is None:
                 self._motion_force_at_full = self.motion_force(self.prescribed)
             return self._motion_force_at_full
+        return float(np.linalg.norm(self._motion_reaction_field(prescribed)))
+
+    def motion_force_at(self, load_factor: float) -> float:
+        """``motion_force`` of the supported values at ``load_factor`` (``prescribed_at``),
+        from the reactions at the path's two ends, which it combines linearly."""
+        if self.initial_prescribed is None:
+            return abs(load_factor) * self.motion_force()
+        if self._motion_reactions is None:
+            self._motion_reactions = (
+                self._motion_reaction_field(self.initial_prescribed),
+                self._motion_reaction_field(self.prescribed),
+            )
+        start, end = self._motion_reactions
+        return float(np.linalg.norm(start + load_factor * (end - start)))
+
+    def _motion_reaction_field(self, prescribed: np.ndarray) -> np.ndarray:
+        """The reactions of ``motion_force`` at every node, (n_nodes, 3) (zero where free)."""
         values = np.where(self.constrained, prescribed, 0.0).reshape(-1, 3)
+        field_ = np.zeros_like(values)
         if not np.any(values):
-            return 0.0
+            return field_
         laplacian = self._stiffness_laplacian()
         constrained = self.constrained.reshape(-1, 3)
         moved = [c for c in range(3) if np.any(values[constrained[:, c], c])]
-        squares = 0.0
         while moved:  # the components held at the same nodes share one factorisation
             held = constrained[:, moved[0]]
             same = [c for c in moved if np.array_equal(constrained[:, c], held)]
@@ -320,8 +453,10 @@ class DiscreteSystem:
                 linear.release()
             L_held = laplacian[held]
             reactions = L_held[:, ~held] @ v_free + L_held[:, held] @ v_held
-            squares += float(np.sum(reactions**2))
-        return float(np.sqrt(squares))
+            rows = np.flatnonzero(held)
+            for column, c in enumerate(same):
+                field_[rows, c] = reactions[:, column]
+        return field_
 
     def _stiffness_laplacian(self) -> sp.csr_matrix:
         """L of ``motion_force``, (n_nodes, n_nodes), N/m: the step metric under each
@@ -407,7 +542,10 @@ class DiscreteSystem:
     def _pressurised(self) -> slice | np.ndarray | None:
         """The elements under pressure: their indices, a slice if they are all of them, None if
         there are none."""
-        loaded = np.flatnonzero(self.loading.pressure)
+        pressure = self.loading.pressure
+        if self.initial is not None:
+            pressure = np.abs(pressure) + np.abs(self.initial.pressure)
+        loaded = np.flatnonzero(pressure)
         if loaded.size == 0:
             return None
         return slice(0, loaded.size) if loaded.size == self.mesh.n_elements else loaded
@@ -441,6 +579,28 @@ class DiscreteSystem:
         load_factor; the unknown of volume control and gas loads)."""
         if pressure_factor is None:
             pressure_factor = load_factor
+        return self._follower_forces(
+            u,
+            self.pressure_at(pressure_factor),
+            self._edge_terms(load_factor),
+            stiffness,
+            stiffness_sink,
+            pressure_stiffness,
+            x_elements,
+        )
+
+    def _follower_forces(
+        self,
+        u: np.ndarray,
+        pressures: np.ndarray,
+        edge_terms: list[tuple[FollowerEdgeLoad, float]],
+        stiffness: bool,
+        stiffness_sink: StiffnessSink | None,
+        pressure_stiffness: bool,
+        x_elements: np.ndarray | None,
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """``follower_forces`` of the element pressures (n_elements,) and the follower edge
+        loads, each with the factor on its values."""
         x_nodes = self.mesh.nodes + u.reshape(-1, 3)
         forces = np.zeros(self.n_dofs)
         blocks: list[tuple[np.ndarray | slice, np.ndarray]] = []  # when no sink is given
@@ -452,7 +612,7 @@ class DiscreteSystem:
         loaded = self._pressurised()
         if loaded is not None:
             x = self._loaded_coordinates(u, loaded, x_elements)
-            pressure = pressure_factor * self.loading.pressure[loaded]
+            pressure = pressures[loaded]
             if self.compiled:
                 compiled.add_pressure_forces(forces, self.pattern.element_dofs[loaded], x, pressure)
             else:
@@ -465,9 +625,9 @@ class DiscreteSystem:
                     block = slice(start, min(start + KERNEL_BLOCK, x.shape[0]))
                     elements = block if isinstance(loaded, slice) else loaded[block]
                     sink(elements, pressure_forces(x[block], pressure[block])[1])
-        for edge_load in self.loading.follower_edges:
+        for edge_load, factor in edge_terms:
             triples = edge_load.edges
-            f, k = edge_follower_forces(x_nodes[triples], load_factor * edge_load.normal, stiffness)
+            f, k = edge_follower_forces(x_nodes[triples], factor * edge_load.normal, stiffness)
             dofs = (3 * triples[:, :, None] + np.arange(3)).reshape(-1, 9)
             forces += np.bincount(dofs.ravel(), f.ravel(), minlength=self.n_dofs)
             if stiffness:
@@ -487,16 +647,17 @@ class DiscreteSystem:
         return forces, K
 
     def subtract_pressure_stiffness(
-        self, K: np.ndarray, x: np.ndarray, elements: np.ndarray | slice, load_factor: float
+        self, K: np.ndarray, x: np.ndarray, elements: np.ndarray | slice, pressures: np.ndarray
     ) -> None:
         """Subtract the pressure's load stiffness from the element matrices K (m, 9, 9) of
-        ``elements`` (a slice or indices) in place; x (m, 3, 3) their current coordinates."""
-        pressure = self.loading.pressure[elements]
+        ``elements`` (a slice or indices) in place; x (m, 3, 3) their current coordinates,
+        pressures (n_elements,) every element's pressure (``pressure_at``)."""
+        pressure = pressures[elements]
         if np.any(pressure):
             if self.compiled:
-                compiled.subtract_pressure_stiffness(K, x, load_factor * pressure)
+                compiled.subtract_pressure_stiffness(K, x, pressure)
             else:
-                subtract_pressure_stiffness(K, x, load_factor * pressure)
+                subtract_pressure_stiffness(K, x, pressure)
 
     @property
     def encloses_volume(self) -> bool:
@@ -605,16 +766,19 @@ class DiscreteSystem:
             )
         return None
 
-    def pressure_work(self, u: np.ndarray, x_elements: np.ndarray | None = None) -> float:
-        """Sum of p V_cone over the pressurised elements at full load (``pressure_volume``):
-        the pressure's potential is minus this; exact when the boundary is held or moves in
-        planes through the origin (symmetry planes), otherwise a merit for the solver only.
-        x_elements: ``element_coordinates(u)`` if the caller has them."""
+    def pressure_work(
+        self, u: np.ndarray, x_elements: np.ndarray | None = None, pressure_factor: float = 1.0
+    ) -> float:
+        """Sum of p V_cone over the pressurised elements at ``pressure_factor``
+        (``pressure_at``, ``pressure_volume``): the pressure's potential is minus this; exact
+        when the boundary is held or moves in planes through the origin (symmetry planes),
+        otherwise a merit for the solver only. x_elements: ``element_coordinates(u)`` if the
+        caller has them."""
         loaded = self._pressurised()
         if loaded is None:
             return 0.0
         x = self._loaded_coordinates(u, loaded, x_elements)
-        return float(self.loading.pressure[loaded] @ pressure_volume(x))
+        return float(self.pressure_at(pressure_factor)[loaded] @ pressure_volume(x))
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
         """Global internal force vector f* (membrane, bending and cables), (n_dofs,)."""
@@ -671,7 +835,7 @@ class DiscreteSystem:
 
     def reactions(self, u: np.ndarray, load_factor: float) -> np.ndarray:
         """Support reactions f* - f_ext at the constrained dofs (zero elsewhere), (n_dofs,)."""
-        external = load_factor * self.loading.forces
+        external = self.forces_at(load_factor)
         if self.has_follower_loads:
             external = external + self.follower_forces(u, load_factor, stiffness=False)[0]
         return np.where(self.constrained, self.internal_forces(u) - external, 0.0)
@@ -683,11 +847,14 @@ class DiscreteSystem:
         pressure_factor: float | None = None,
     ) -> StepProblem:
         """The nonlinear problem at one load level (``StepProblem``); prescribed: (n_dofs,)
-        values of the constrained components (default load_factor times those at full
-        load); pressure_factor: the factor on the pressures (default load_factor)."""
+        values of the constrained components (default those at load_factor,
+        ``prescribed_at``); pressure_factor: the factor on the pressures (default
+        load_factor)."""
         if prescribed is None:
-            problem = StepProblem(self, load_factor, load_factor * self.prescribed, pressure_factor)
-            problem.motion_force = abs(load_factor) * self.motion_force()
+            problem = StepProblem(
+                self, load_factor, self.prescribed_at(load_factor), pressure_factor
+            )
+            problem.motion_force = self.motion_force_at(load_factor)
             return problem
         return StepProblem(self, load_factor, np.asarray(prescribed, dtype=float), pressure_factor)
 
@@ -697,9 +864,15 @@ class DiscreteSystem:
         the load factor or the pressure factor multiplies (the bordered solves of
         ``wrinkle.solvers.bordered``)."""
         dead = 0.0 if pressure_only else 1.0
-        forces = dead * self.loading.forces
+        forces = dead * (self.forces_at(1.0) - self.forces_at(0.0))
         if self.has_follower_loads:
-            forces = forces + self.follower_forces(u, dead, stiffness=False, pressure_factor=1.0)[0]
+            edges = [] if pressure_only else self._edge_terms(1.0)
+            if self.initial is not None and not pressure_only:
+                edges += [(edge, -1.0) for edge in self.initial.follower_edges]
+            edges = [(edge, factor) for edge, factor in edges if factor != 0.0]
+            pressures = self.pressure_at(1.0) - self.pressure_at(0.0)
+            follower = self._follower_forces(u, pressures, edges, False, None, True, None)[0]
+            forces = forces + follower
         return np.where(self.constrained, 0.0, forces)
 
     def evaluate(
@@ -732,7 +905,8 @@ class StepProblem:
         self.system = system
         self.load_factor = load_factor
         self.pressure_factor = load_factor if pressure_factor is None else pressure_factor
-        self.forces = load_factor * system.loading.forces
+        self.forces = system.forces_at(load_factor)
+        self.pressures = system.pressure_at(self.pressure_factor)  # (n_elements,)
         self.prescribed = prescribed
         self.free = ~system.constrained
         self.symmetric = not system.has_follower_loads
@@ -764,7 +938,7 @@ class StepProblem:
 
         def add_element_stiffness(elements: np.ndarray | slice, K: np.ndarray) -> None:
             # assembled block by block as evaluated
-            system.subtract_pressure_stiffness(K, x[elements], elements, self.pressure_factor)
+            system.subtract_pressure_stiffness(K, x[elements], elements, self.pressures)
             with timer.part(ASSEMBLY):
                 pattern.add_to_data(data, elements, K, compiled=system.compiled)
 
@@ -797,8 +971,8 @@ class StepProblem:
                     pressure_factor=self.pressure_factor,
                 )
             external = external + follower
-            energy -= self.pressure_factor * system.pressure_work(u, x_elements=x)
-            if system.loading.follower_edges or not system.pressure_has_potential:
+            energy -= system.pressure_work(u, x, self.pressure_factor)
+            if system.has_follower_edges or not system.pressure_has_potential:
                 energy = np.nan  # follower edge loads, an open pressurised surface: none
         residual = np.where(self.free, external - internal, 0.0)
         reactions = np.where(self.free, 0.0, internal - external)

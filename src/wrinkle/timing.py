@@ -39,6 +39,13 @@ class Stopwatch:
             if self._inner:
                 self._inner[-1] += elapsed
 
+    def absorb(self, other: Stopwatch) -> None:
+        """Add the seconds and factorisations of another stopwatch (a later part of the same
+        run) to this one's."""
+        for name, seconds in other.seconds.items():
+            self.seconds[name] += seconds
+        self.factorisations += other.factorisations
+
     def summary(self) -> dict[str, float]:
         """Seconds in each part, "rest" (everything else) and "total" since creation."""
         total = time.perf_counter() - self._start
