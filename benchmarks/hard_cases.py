@@ -8,8 +8,8 @@ The cases (case files in benchmarks/hard_cases/ and examples/):
   mesh of 2,538 triangles (airbag_gmsh.toml, made by benchmarks/gmsh_airbag.py);
 - the same airbag at 10 Pa, with and without the sheet's bending stiffness;
 - the sheared rectangle with free sides (sheared_rectangle.toml), 40 x 20 up;
-- the pulled-node fan (pulled_node.toml), and the same node pushed (the load reversed: the
-  sheet round the node goes slack);
+- the pulled-node fan (pulled_node.toml), the same node pushed (the load reversed: the sheet
+  round the node goes slack), and pulled then pushed in one run (two analysis steps);
 - a fully slack start: the shear-stretch square of examples/shear_stretch.toml solved from a
   state shrunk 10 % about its centre (every element slack), against the flat start.
 
@@ -105,6 +105,21 @@ def pushed_supports(pulled: list[float]) -> list[dict[str, Any]]:
     ]
 
 
+def reversed_supports() -> dict[str, Any]:
+    """The fan's node pulled 0.1 out, then pushed to 0.1 into the sheet, in one run: two
+    supports of the node, each growing in its own analysis step."""
+    supports = pushed_supports([0.0, 0.1, 0.0])
+    supports[1]["label"] = "pull"
+    push = {**supports[1], "label": "push", "displacement": [0.0, -0.1, 0.0]}
+    return {
+        "support": [*supports[:2], push, supports[2]],
+        "step": [
+            {"name": "pull", "supports": ["pull"], "steps": 2},
+            {"name": "push", "supports": ["push"], "steps": 4},
+        ],
+    }
+
+
 def cases(args: argparse.Namespace) -> list[HardCase]:
     runs = []
     for path, label in ((AIRBAG, "airbag 32x32"), (GMSH_AIRBAG, "airbag gmsh")):
@@ -140,6 +155,14 @@ def cases(args: argparse.Namespace) -> list[HardCase]:
                 reaction_of("pulled"),
             )
         )
+        runs.append(
+            HardCase(
+                f"pulled, then pushed {n}x{n}",
+                FAN,
+                {"mesh": mesh, **reversed_supports()},
+                reaction_of("push"),
+            )
+        )
     for n in args.slack:
         runs.append(
             HardCase(
@@ -168,7 +191,10 @@ def run(hard: HardCase, look_ahead: bool) -> dict[str, Any]:
     u0 = hard.start(case) if hard.start is not None else None
     start = time.perf_counter()
     try:
-        results = case.model.solve(case.settings, u0=u0)
+        if case.steps:  # analysis steps ([[step]]), each from the end of the last
+            results = case.solve()
+        else:
+            results = case.model.solve(case.settings, u0=u0)
         converged, result = True, ""
     except ConvergenceError as error:
         results, converged = error.results, False

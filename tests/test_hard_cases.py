@@ -129,3 +129,46 @@ def test_a_node_pushed_into_the_sheet_converges_to_no_force():
     assert results.final.states[2] > 0  # slack elements
     reaction = case.model.support_reactions(results.final.reactions)["pulled"]
     np.testing.assert_allclose(reaction, 0.0, atol=1e-8 * case.model.discretise().motion_force())
+
+
+# the fan's node pulled 0.1 out of the sheet, then pushed back to 0.1 into it, in one run:
+# two supports of the node, each growing in its own analysis step (wrinkle.staging)
+REVERSED = {
+    "support": [
+        {"label": "bottom", "nodes": "y == 0", "fix": ["x", "y", "z"]},
+        {"label": "pull", "nodes": "x == 0.5 and y == 1", "displacement": [0.0, 0.1, 0.0]},
+        {"label": "push", "nodes": "x == 0.5 and y == 1", "displacement": [0.0, -0.1, 0.0]},
+        {"label": "plane", "nodes": "z == 0", "fix": ["z"]},
+    ],
+    "step": [
+        {"name": "pull", "supports": ["pull"], "steps": 2},
+        {"name": "push", "supports": ["push"], "steps": 4},
+    ],
+}
+
+
+def test_a_load_reversed_in_one_run_until_the_sheet_goes_slack():
+    """The pulled node pushed back through the sheet's plane within one run (issue 18's
+    reversed load, now two analysis steps): each state is in balance at its own loads (the
+    node's value from +0.1 through 0 to -0.1); at the end the sheet round the node is slack
+    and the node carries no force, as when it is pushed from the start; the pulled state
+    equals the fan's own run."""
+    case = read_case(FAN, overrides=REVERSED)
+    results = case.solve()
+    assert [s.analysis_step for s in results.steps] == [1, 1, 2, 2, 2, 2]
+    node = case.model.supports[1].dofs[1]  # the node's y component
+    moved = [s.displacement[node] for s in results.steps]
+    np.testing.assert_allclose(moved, [0.05, 0.1, 0.05, 0.0, -0.05, -0.1], atol=1e-15)
+    for step in results.steps:
+        system = results.system_of(step.analysis_step)
+        evaluation = system.at(step.load_factor).evaluate(step.displacement, stiffness=False)
+        assert is_converged(evaluation, case.settings.tolerance), (step.analysis_step, step)
+    assert results.final.states[2] > 0  # slack round the node
+    reactions = case.model.support_reactions(results.final.reactions)
+    scale = case.model.discretise().motion_force()
+    np.testing.assert_allclose(reactions["push"], 0.0, atol=1e-8 * scale)
+    fan = read_case(FAN)  # pulled from the start; the slack parts' shape is not unique,
+    pulled = fan.solve()  # the node's force is
+    reference = fan.model.support_reactions(pulled.final.reactions)["pulled"]
+    force = case.model.support_reactions(results.steps[1].reactions)["pull"]
+    np.testing.assert_allclose(force, reference, rtol=0, atol=1e-6 * np.abs(reference).max())

@@ -1199,7 +1199,7 @@ def _read_steps(
         if ("loads", label) not in named:
             reader.fail("[[step]]", f"load {label!r} grows in no step: name it in 'loads'")
     for support in model.supports:
-        moving = np.any(model.prescribed[support.dofs])
+        moving = np.any(support.prescribed())
         if moving and ("supports", support.label) not in named:
             reader.fail(
                 "[[step]]",

@@ -78,12 +78,18 @@ def _component_indices(components: str | Sequence[str]) -> list[int]:
 class Support:
     """A named set of supported nodes and the dofs it holds; its reaction is the sum over
     those dofs (a node held by two supports in different directions counts in each for the
-    directions it holds there)."""
+    directions it holds there). values: the displacements it prescribes at its dofs at load
+    factor 1 (zero for ``fix``), which an analysis step that names it moves them to."""
 
     label: str
     nodes: np.ndarray
     dofs: np.ndarray
     moment_about: np.ndarray | None = None  # (3,): report the reaction's moment about it
+    values: np.ndarray | None = None  # (len(dofs),); None: zero
+
+    def prescribed(self) -> np.ndarray:
+        """The values at its dofs, (len(dofs),)."""
+        return np.zeros(self.dofs.size) if self.values is None else self.values
 
 
 def _indices(selection: ArrayLike, count: int, what: str) -> np.ndarray:
@@ -291,6 +297,7 @@ class Model:
         dofs: np.ndarray,
         label: str | None,
         moment_about: ArrayLike | None = None,
+        values: np.ndarray | None = None,
     ) -> None:
         label = label or f"support {len(self.supports) + 1}"
         point = None
@@ -298,7 +305,9 @@ class Model:
             point = np.asarray(moment_about, dtype=float)
             if point.shape != (3,) or not np.all(np.isfinite(point)):
                 raise ValueError(f"moment_about must be a point [x, y, z], got {moment_about!r}")
-        self.supports.append(Support(label, nodes, np.unique(dofs), point))
+        dofs, first = np.unique(dofs, return_index=True)
+        held = np.zeros(dofs.size) if values is None else np.asarray(values, float)[first]
+        self.supports.append(Support(label, nodes, dofs, point, held))
         self._changed()
 
     def fix(
@@ -321,6 +330,8 @@ class Model:
         where the reference mesh has them (a form-found mesh, whose boundary the prescribed
         displacements moved into place, ``wrinkle.formfinding``)."""
         self.prescribed[:] = 0.0
+        for support in self.supports:
+            support.values = np.zeros(support.dofs.size)
         self._changed()
 
     def prescribe(
@@ -341,7 +352,7 @@ class Model:
         set_ = ~np.isnan(values)
         self.constrained[dofs[set_]] = True
         self.prescribed[dofs[set_]] = values[set_]
-        self._add_support(chosen, dofs[set_], label, moment_about)
+        self._add_support(chosen, dofs[set_], label, moment_about, values[set_])
 
     def _load_part(self, label: str | None) -> list[tuple[str, Any, Any]]:
         """The contributions of the load labelled ``label`` (default "load N", N counting
@@ -406,6 +417,15 @@ class Model:
                 f"node {chosen[node]} is free in {'xyz'[component]}: prescribe it to hold it"
             )
         self.prescribed[dofs[given]] = values[given]
+        changed = np.zeros(self.n_dofs)
+        changed[dofs[given]] = values[given]
+        mask = np.zeros(self.n_dofs, dtype=bool)
+        mask[dofs[given]] = True
+        for support in self.supports:  # every support holding a changed component
+            inside = mask[support.dofs]
+            if np.any(inside):
+                own = np.zeros(support.dofs.size) if support.values is None else support.values
+                support.values = np.where(inside, changed[support.dofs], own)
         self._changed()
 
     def add_pressure(
@@ -630,7 +650,7 @@ class Model:
         prescribed = self._start_prescribed(start)
         for support in self.supports:
             if support.label in supports:
-                prescribed[support.dofs] = self.prescribed[support.dofs]
+                prescribed[support.dofs] = support.prescribed()
         moved = frozenset(supports) | (start.state.supports if start is not None else frozenset())
         return LoadState(parts, self.constrained.copy(), prescribed, moved)
 

@@ -409,8 +409,11 @@ class DiscreteSystem:
         return float(np.linalg.norm(self._motion_reaction_field(prescribed)))
 
     def motion_force_at(self, load_factor: float) -> float:
-        """``motion_force`` of the supported values at ``load_factor`` (``prescribed_at``),
-        from the reactions at the path's two ends, which it combines linearly."""
+        """The force scale of the prescribed motion at ``load_factor``: ``motion_force`` of
+        the supported values there (``prescribed_at``) or, if larger, of their change since
+        the path's start (from the reactions at its two ends, combined linearly). A path that
+        moves a support back through its reference position (a node pulled, then pushed) has
+        values of zero half-way, but not a motion of zero: the change keeps the scale."""
         if self.initial_prescribed is None:
             return abs(load_factor) * self.motion_force()
         if self._motion_reactions is None:
@@ -419,7 +422,8 @@ class DiscreteSystem:
                 self._motion_reaction_field(self.prescribed),
             )
         start, end = self._motion_reactions
-        return float(np.linalg.norm(start + load_factor * (end - start)))
+        change = load_factor * (end - start)
+        return float(max(np.linalg.norm(start + change), np.linalg.norm(change)))
 
     def _motion_reaction_field(self, prescribed: np.ndarray) -> np.ndarray:
         """The reactions of ``motion_force`` at every node, (n_nodes, 3) (zero where free)."""
