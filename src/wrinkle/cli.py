@@ -1,6 +1,7 @@
 """Command line: ``wrinkle run CASE [--out DIR] [--restart] [-q]``, ``wrinkle formfind
 CASE [--out DIR] [-q]``, ``wrinkle plot DIR [--load LOAD]``, ``wrinkle show DIR``,
-``wrinkle --version`` (also ``python -m wrinkle ...``).
+``wrinkle study STUDY [--out DIR] [--scheduler ADDRESS] [--workers N] [-q]``, ``wrinkle
+--version`` (also ``python -m wrinkle ...``).
 
 ``run`` solves a TOML case file and writes each converged step into DIR as it converges
 (``wrinkle.case.Case.run``; with a [formfinding] table it form-finds first; ``--restart``
@@ -9,11 +10,13 @@ form-finds the case (its [formfinding] table, or the defaults) without its loads
 the found form into DIR, with ``formfound.msh``; ``plot`` draws the pictures of such a
 directory (``wrinkle.plot.plot_results``; ``--load``: pressure, load_factor or a support's
 label on the load axis of load_displacement.png); ``show`` opens an interactive view of the
-last step (``wrinkle.show.show_results``, needs the ``viz`` extra, pyvista); ``-v`` before
-the command logs every iteration.
+last step (``wrinkle.show.show_results``, needs the ``viz`` extra, pyvista); ``study`` runs
+the variants of a parameter study into DIR/study.csv, a folder per variant and pictures
+(``wrinkle.studies``); ``-v`` before the command logs every iteration.
 
 Exit status: 0 done; 1 a load step did not converge, no form was found, the last state has
-no natural modes ([modes] on an unstable state), or a results file could not be written
+no natural modes ([modes] on an unstable state), a variant of a study did not answer (the
+study table has them all), or a results file could not be written
 (every converged step written before is on disk); 2 bad input (a one-line message naming
 the file, key, node or element, or a missing optional dependency); 130 interrupted.
 
@@ -103,6 +106,52 @@ def _plot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _study(args: argparse.Namespace) -> int:
+    from wrinkle.studies import read_study, run_study, write_table
+    from wrinkle.studies.table import TRAILING, columns
+
+    study = read_study(args.study)
+    paths = [parameter.path for parameter in study.parameters]
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out}: is a file, not a folder for the study")
+    rows: dict[int, dict] = {}
+    total = len(study.variants)
+
+    def finished(row: dict) -> None:
+        rows[int(row["variant"])] = row
+        write_table([rows[k] for k in sorted(rows)], out, paths, study.collect)
+        if not args.quiet:
+            print(
+                f"variant {int(row['variant']):4d}  ({len(rows)} of {total})  {row['status']}"
+                f"  {float(row['seconds']):.1f} s",
+                file=sys.stderr,
+            )
+
+    table = run_study(study, out, args.scheduler, args.workers, on_row=finished)
+    write_table(table, out, paths, study.collect)
+    names = columns(table, paths, study.collect)
+    quantities = [name for name in names if name not in {"variant", *paths, *TRAILING}]
+    try:
+        from wrinkle.studies.pictures import plot_study
+
+        plot_study(table, out, paths, quantities)
+    except ImportError as error:  # matplotlib missing: the table stands
+        print(f"wrinkle: no pictures: {error}", file=sys.stderr)
+    failed = [row for row in table if row["status"] != "converged"]
+    if not args.quiet:
+        print(f"wrote {out}/study.csv: {total} variants, {len(failed)} failed", file=sys.stderr)
+    if failed:
+        first = failed[0]
+        print(
+            f"wrinkle: {len(failed)} of {total} variants did not answer, the first "
+            f"(variant {first['variant']}): {first['status']}: {first['message']}",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
 def _show(args: argparse.Namespace) -> int:
     from wrinkle.show import show_results
 
@@ -143,6 +192,20 @@ def main(argv: list[str] | None = None) -> int:
         "(default: the pressure if the run has one, else the load factor)",
     )
     plot.set_defaults(run=_plot)
+    study = sub.add_parser("study", help="run the variants of a parameter study (docs/studies.md)")
+    study.add_argument("study", help="study file (TOML)")
+    study.add_argument("--out", default="study", help="output directory")
+    study.add_argument(
+        "--scheduler",
+        default=None,
+        help="address of a Dask scheduler (tcp://HOST:PORT); default: a local cluster of "
+        "the machine's cores (local processes without Dask)",
+    )
+    study.add_argument(
+        "--workers", type=int, default=None, help="local worker processes (default: the cores)"
+    )
+    study.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    study.set_defaults(run=_study)
     show = sub.add_parser(
         "show", help="interactive view of the last step (needs pyvista: wrinkle[viz])"
     )
