@@ -81,6 +81,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from wrinkle.cables import CableState
+from wrinkle.element import ElementResult
 from wrinkle.mesh import require_meshio
 from wrinkle.post import (
     ElementReport,
@@ -371,14 +372,18 @@ class ResultWriter:
         name = step_file_name(index, self.file_format)
         path = self.out_dir / name
         displacement = np.asarray(step.displacement, dtype=float)
-        report = element_report(self.model, displacement)
+        # one evaluation of the elements for the fields and the energies
+        elements = None
+        if self.system is not None:
+            elements = self.system.evaluate_elements(displacement, stiffness=False)
+        report = element_report(self.model, displacement, elements)
         self._write_step_file(path, step, report)
         u = displacement.reshape(-1, 3)
         reactions = np.asarray(step.reactions, dtype=float)
         support_forces = support_reactions(self.supports, reactions)
         positions = self.model.mesh.nodes + u
         moments = support_moments(self.supports, reactions, positions)
-        quantities = self._quantities(displacement, report, positions)
+        quantities = self._quantities(displacement, report, positions, elements)
         self._last_displacement = displacement
         probe_means = {name: u[nodes].mean(axis=0) for name, nodes in self.probes.items()}
         states = [int(s) for s in step.states]
@@ -442,7 +447,13 @@ class ResultWriter:
         number = int(getattr(step, "analysis_step", 1))
         return {"analysis_step": number, "time": number - 1 + float(step.load_factor)}
 
-    def _quantities(self, u: np.ndarray, report: ElementReport, positions: np.ndarray) -> dict:
+    def _quantities(
+        self,
+        u: np.ndarray,
+        report: ElementReport,
+        positions: np.ndarray,
+        elements: ElementResult | None = None,
+    ) -> dict:
         """The step's "strain_energy" (``DiscreteSystem.strain_energy_and_forces``),
         "external_work" (the loads' and the supports' work from the reference state, by the
         trapezoidal rule over the steps on the internal forces f*, which at a balanced state
@@ -450,7 +461,7 @@ class ResultWriter:
         "max_principal_stress" ({"value", "element", "position"}: the largest major principal
         Cauchy stress resultant, its element and the element's current centroid)."""
         if self.system is not None:
-            energy, forces = self.system.strain_energy_and_forces(u)
+            energy, forces = self.system.strain_energy_and_forces(u, elements)
             previous = self._last_forces
             if previous is None:
                 previous = self.system.strain_energy_and_forces(np.zeros_like(u))[1]

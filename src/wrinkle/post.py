@@ -33,6 +33,7 @@ from wrinkle.wrinkling import (
 )
 
 if TYPE_CHECKING:
+    from wrinkle.element import ElementResult
     from wrinkle.model import Model
 
 __all__ = [
@@ -158,10 +159,13 @@ def _unit(vectors: np.ndarray) -> np.ndarray:
     return vectors / np.where(length > 0, length, 1.0)[:, None]
 
 
-def element_report(model: Model, u: np.ndarray) -> ElementReport:
-    """Per-element results of ``model`` at displacements u, (n_dofs,)."""
+def element_report(
+    model: Model, u: np.ndarray, elements: ElementResult | None = None
+) -> ElementReport:
+    """Per-element results of ``model`` at displacements u, (n_dofs,); elements: the
+    ``evaluate_elements(u, stiffness=False)`` of its discrete system, if the caller has it."""
     system = model.discretise()
-    result = system.evaluate_elements(u, stiffness=False)
+    result = system.evaluate_elements(u, stiffness=False) if elements is None else elements
     F = result.deformation_gradient
     C = right_cauchy_green(F)
     q = plane_quantities(C, result.response)

@@ -788,11 +788,15 @@ class DiscreteSystem:
         """Global internal force vector f* (membrane, bending and cables), (n_dofs,)."""
         return self.strain_energy_and_forces(u)[1]
 
-    def strain_energy_and_forces(self, u: np.ndarray) -> tuple[float, np.ndarray]:
+    def strain_energy_and_forces(
+        self, u: np.ndarray, elements: ElementResult | None = None
+    ) -> tuple[float, np.ndarray]:
         """The stored energy at u (n_dofs,): the membrane's relaxed strain energy (with its
         prestress's work) plus the bending and the cables' energies (energy units), and the
-        internal force vector f* = dU/du, (n_dofs,), from one evaluation of the elements."""
-        result = self.evaluate_elements(u, stiffness=False)
+        internal force vector f* = dU/du, (n_dofs,), from one evaluation of the elements
+        (``elements``, that of ``evaluate_elements(u, stiffness=False)``, if the caller has
+        it)."""
+        result = self.evaluate_elements(u, stiffness=False) if elements is None else elements
         forces = self.pattern.assemble_vector(result.forces)
         energy = float(np.sum(result.energy))
         energy += self.add_bending(u, forces, None)
