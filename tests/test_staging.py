@@ -319,3 +319,18 @@ def test_the_roof_example_is_prestressed_by_its_frame_then_lifted(tmp_path):
     rise = folder.history["centre_uz"]
     assert rise[0] == pytest.approx(0.0, abs=1e-12) and np.all(np.diff(rise) > 0)
     assert folder.summary["analysis_steps"] == ["prestress", "wind"]
+
+
+def test_a_staged_xdmf_series_is_timed_by_the_total_time(tmp_path):
+    """examples/roof.toml written as an XDMF time series: meshio's reader sees every step at
+    its total time (analysis step - 1 + load factor), increasing across the steps."""
+    meshio = pytest.importorskip("meshio")
+    pytest.importorskip("h5py")
+    path = tmp_path / "roof.toml"
+    text = (ROOT / "examples" / "roof.toml").read_text()
+    path.write_text(text.replace("[solver]", '[output]\nformat = "xdmf"\n\n[solver]'))
+    read_case(path, {"mesh": {"rectangle": {"nx": 8, "ny": 8}}}).run(tmp_path / "out")
+    with meshio.xdmf.TimeSeriesReader(tmp_path / "out" / "results.xdmf") as reader:
+        reader.read_points_cells()
+        times = [reader.read_data(k)[0] for k in range(reader.num_steps)]
+    assert times == pytest.approx([1.0, 1.25, 1.5, 1.75, 2.0])
