@@ -238,6 +238,10 @@ def staged_sheet(steps: str) -> str:
             '[[step]]\nloads = ["pull"]\nsupports = ["top"]\ncontrol = "volume"\n',
             "control = 'volume' is solved in one path",
         ),
+        (
+            '[[step]]\nloads = ["pull"]\nsupports = ["top"]\ncontrol = "arc-length"\n',
+            r"\[\[step\]\] 1: control = 'arc-length'.*moves support 'top'",
+        ),
     ],
 )
 def test_bad_step_tables_are_one_line_naming_the_table(tmp_path, steps, message):
@@ -334,3 +338,66 @@ def test_a_staged_xdmf_series_is_timed_by_the_total_time(tmp_path):
         reader.read_points_cells()
         times = [reader.read_data(k)[0] for k in range(reader.num_steps)]
     assert times == pytest.approx([1.0, 1.25, 1.5, 1.75, 2.0])
+
+
+def test_a_restart_sets_a_component_two_supports_hold_as_the_run_did(tmp_path):
+    """Two supports of one node, the one later in the file named first: the node ends the
+    second step where the second step's support puts it, and a run restarted in the third
+    step starts it there too (the state rebuilt step by step, not in the file's order)."""
+    fan = ROOT / "benchmarks" / "hard_cases" / "pulled_node.toml"
+    node = "x == 0.5 and y == 1"
+    overrides = {
+        "support": [
+            {"label": "bottom", "nodes": "y == 0", "fix": ["x", "y", "z"]},
+            {"label": "push", "nodes": node, "displacement": [0.0, 0.05, 0.0]},
+            {"label": "pull", "nodes": node, "displacement": [0.0, 0.1, 0.0]},
+            {"label": "plane", "nodes": "z == 0", "fix": ["z"]},
+        ],
+        "load": [
+            {
+                "label": "tug",
+                "kind": "nodal",
+                "nodes": "x == 0.25 and y == 1",
+                "force": [0.0, 1e-3, 0.0],
+            }
+        ],
+        "step": [
+            {"supports": ["pull"]},
+            {"supports": ["push"]},
+            {"loads": ["tug"], "steps": 3},
+        ],
+    }
+    full = read_case(fan, overrides).run(tmp_path / "full")
+    y = 3 * int(full.model.supports[1].nodes[0]) + 1
+    assert [s.displacement[y] for s in full.steps] == pytest.approx([0.1, 0.05, 0.05, 0.05, 0.05])
+    count = [0]
+
+    def stop(step):
+        count[0] += 1
+        if count[0] == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        read_case(fan, overrides).run(tmp_path / "again", on_step=stop)
+    again = read_case(fan, overrides).run(tmp_path / "again", restart=True)
+    assert [s.displacement[y] for s in again.steps] == pytest.approx([0.05, 0.05])
+    reference = wrinkle.open_results(tmp_path / "full").displacement()
+    restarted = wrinkle.open_results(tmp_path / "again").displacement()
+    np.testing.assert_allclose(restarted, reference, rtol=0, atol=1e-10)
+
+
+def test_pressures_that_cancel_are_reported_as_zero_with_their_volume():
+    """A frame-held square inflated by one pressure load, then vented by another of the
+    opposite sign: the pressure reported is 5 then 0 (not missing), and the enclosed volume
+    of the elements under pressure is reported in both steps (back to flat after the vent)."""
+    mesh = wrinkle.rectangle(1.0, 1.0, 4, 4)
+    model = wrinkle.Model(mesh, StVenantKirchhoff.isotropic(E=1e4, nu=0.3, thickness=1e-3))
+    model.fix("x == 0 or x == 1 or y == 0 or y == 1")
+    model.add_pressure(5.0, label="inflate")
+    model.add_pressure(-5.0, label="vent")
+    inflated = model.solve(loads=["inflate"], tolerance=1e-10)
+    vented = model.solve(start=inflated, loads=["vent"], tolerance=1e-10)
+    assert inflated.final.pressure == pytest.approx(5.0)
+    assert vented.final.pressure == pytest.approx(0.0, abs=1e-12)
+    assert inflated.final.enclosed_volume > 0
+    assert abs(vented.final.enclosed_volume) < 1e-4 * inflated.final.enclosed_volume  # flat

@@ -279,3 +279,18 @@ def test_the_example_study_reads():
     study = read_study(Path(__file__).resolve().parents[1] / "examples/studies/fibre_angles.toml")
     assert len(study.variants) == 21
     assert study.variants[-1] == {"material.angle": 90.0, "material.E_L": 70.0}
+
+
+def test_a_study_run_again_after_its_case_changed_solves_again(tmp_path):
+    """The finished variants are taken up only while their input is the same: after the
+    base case changes (the top edge moved twice as far), the study solves them again."""
+    path = study_file(
+        tmp_path, 'collect = ["top_Fx"]\n[[parameter]]\npath = "material.E"\nvalues = [1000.0]\n'
+    )
+    first = run_study(read_study(path), tmp_path / "out", workers=1)
+    (tmp_path / "sheet.toml").write_text(SHEET.replace("[0.05, 0.02, 0.0]", "[0.1, 0.02, 0.0]"))
+    again = run_study(read_study(path), tmp_path / "out", workers=1)
+    assert again[0]["top_Fx"] != pytest.approx(first[0]["top_Fx"], rel=1e-3)
+    base = read_case(tmp_path / "sheet.toml")
+    reference = base.model.support_reactions(base.solve().final.reactions)["top"][0]
+    assert again[0]["top_Fx"] == pytest.approx(reference, rel=1e-12)

@@ -565,6 +565,9 @@ class Case:
         except ConvergenceError as error:
             writer.finish(False, f"not converged: {error}")
             raise
+        except ValueError as error:  # a check made when the path starts: said, not "running"
+            writer.finish(False, f"stopped: {error}")
+            raise
         except KeyboardInterrupt:
             writer.finish(False, "interrupted")
             raise
@@ -1192,6 +1195,18 @@ def _read_steps(
         if own.get("control") == "volume":
             reader.fail(where, "control = 'volume' is solved in one path, without [[step]]")
         settings_of_step = _read_solver(reader, {**solver, **own}, where)
+        if settings_of_step.control == "arc-length":
+            movers = [
+                s.label
+                for s in model.supports
+                if s.label in labels["supports"] and np.any(s.prescribed())
+            ]
+            if movers:
+                reader.fail(
+                    where,
+                    f"control = 'arc-length': the loads alone may follow the load factor; "
+                    f"this step moves support {movers[0]!r} (use control = 'load')",
+                )
         steps.append(
             AnalysisStep(name, tuple(labels["loads"]), tuple(labels["supports"]), settings_of_step)
         )

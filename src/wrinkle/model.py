@@ -150,6 +150,7 @@ class Model:
         self.forces = np.zeros(self.n_dofs)  # dead nodal forces at full load
         self.supports: list[Support] = []
         self.pressure = np.zeros(n)  # follower pressure at full load, per element
+        self._pressure_extent = np.zeros(n, dtype=bool)  # under some pressure load
         self.gas: Gas | None = None  # a gas load (add_gas): its pressure on the elements above
         self._edge_follower: list[FollowerEdgeLoad] = []
         # each load's contributions by its label, for analysis steps (``load_state``): dead
@@ -440,6 +441,7 @@ class Model:
             raise ValueError("a model with a gas load can have no other pressure load")
         chosen = self._element_indices(elements)
         self.pressure[chosen] += value
+        self._pressure_extent[chosen] |= value != 0
         self._load_part(label).append(("pressure", chosen.copy(), float(value)))
         self._changed()
 
@@ -489,19 +491,30 @@ class Model:
             raise ValueError("a model has at most one gas load and then no other pressure load")
         chosen = self._element_indices(elements)
         self.pressure[chosen] = 1.0  # the gauge pressure's factor
+        self._pressure_extent[chosen] = True
         self._load_part(label).append(("pressure", chosen.copy(), 1.0))
         self.gas = gas
         self._changed()
 
     @property
+    def pressure_element(self) -> int | None:
+        """The element whose pressure the results report (``pressure``): that of the largest
+        pressure at load factor 1, or, where the pressure loads cancel, the first element
+        under one; None without pressure loads."""
+        if np.any(self.pressure):
+            return int(np.argmax(np.abs(self.pressure)))
+        if np.any(self._pressure_extent):
+            return int(np.argmax(self._pressure_extent))
+        return None
+
+    @property
     def pressure_value(self) -> float | None:
         """The value at load factor 1 of the pressure loads (the one of largest magnitude
         where they differ), which the ``pressure`` of the results reports times the load or
-        pressure factor; 1 for a gas load (the factor is then its gauge pressure); None
-        without pressure."""
-        if not np.any(self.pressure):
-            return None
-        return float(self.pressure[np.argmax(np.abs(self.pressure))])
+        pressure factor; 1 for a gas load (the factor is then its gauge pressure); 0 where
+        the pressure loads cancel; None without pressure loads."""
+        element = self.pressure_element
+        return None if element is None else float(self.pressure[element])
 
     def add_bending(
         self, stiffness: float | None = None, elements: ElementSelection = None
@@ -743,6 +756,7 @@ class Model:
                 Loading(self.forces.copy(), self.pressure.copy(), list(self._edge_follower)),
                 self._bending,
                 self._cable_segments(),
+                self._pressure_extent.copy() if np.any(self._pressure_extent) else None,
             )
         return self._system
 

@@ -122,13 +122,10 @@ class Results:
         if reactions is None:
             reactions = system.reactions(u, load_factor)
         factor = load_factor if pressure_factor is None else pressure_factor
-        value = None
-        if self.model.pressure_value is not None:  # at the element of the largest pressure
-            value = float(system.pressure_at(factor)[np.argmax(np.abs(self.model.pressure))])
-        # the volume of every element a pressure acts on in some analysis step: the model's
-        whole = self.model.discretise()
-        if self._closed is None:
-            self._closed = value is not None and whole.volume_closure() is None
+        element = self.model.pressure_element
+        value = None if element is None else float(system.pressure_at(factor)[element])
+        if self._closed is None:  # (the elements any pressure load acts on, in any step)
+            self._closed = value is not None and system.volume_closure() is None
         step = StepResult(
             load_factor,
             u.copy(),
@@ -139,7 +136,7 @@ class Results:
             solved.stopped_by,
             solved.stop_report,
             value,
-            whole.enclosed_volume(u) if self._closed else None,
+            system.enclosed_volume(u) if self._closed else None,
             tuple(float(r) for r in solved.residual_norms),
             self.analysis_step,
             factor,

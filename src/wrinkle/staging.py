@@ -52,10 +52,14 @@ class AnalysisStep:
 
 def state_after(model: Model, steps: Sequence[AnalysisStep], count: int) -> LoadState:
     """The loads and supported values at the end of the first ``count`` steps (the reference
-    state for 0): every load and support they name at its value."""
-    loads = [label for step in steps[:count] for label in step.loads]
-    supports = [label for step in steps[:count] for label in step.supports]
-    return model.load_state(loads, supports)
+    state for 0), built step by step as the run builds them: where two supports hold a
+    component, the one named later sets it."""
+    state = model.load_state([], [])
+    zero = np.zeros(model.n_dofs)  # (the components held do not change between the steps)
+    for number, step in enumerate(steps[:count]):
+        start = StepStart(state, zero, number) if number else None
+        state = model.load_state(step.loads, step.supports, start)
+    return state
 
 
 def solve_steps(

@@ -186,7 +186,8 @@ class DiscreteSystem:
     loading: the ``Loading`` at load factor 1; cables: the model's tension-only cables
     (``wrinkle.cables``), if any, along mesh edges; bending: the bending energy of the mean
     surface (``wrinkle.bending``), if the model has one; the pattern must then hold the node
-    pairs it couples.
+    pairs it couples; pressurised: (n_elements,) bool, the elements some pressure load acts on
+    (default: those with a pressure in ``loading``).
 
     The loads and supported values at load factor lambda are those at 1 times lambda, or,
     on the path of an analysis step (``along``), L(lambda) = L0 + lambda (L1 - L0) from the
@@ -205,8 +206,13 @@ class DiscreteSystem:
         loading: Loading,
         bending: Bending | None = None,
         cables: Cables | None = None,
+        pressurised: np.ndarray | None = None,
     ):
         self.mesh = mesh
+        # (n_elements,) bool: the elements some pressure load acts on, in any analysis step
+        # (their enclosed volume is reported, their closure checked, even where the loads
+        # are zero or cancel)
+        self.pressure_extent = pressurised
         self.pattern = pattern
         self.geometry = geometry
         self.n_dofs = pattern.n_dofs
@@ -549,6 +555,8 @@ class DiscreteSystem:
         pressure = self.loading.pressure
         if self.initial is not None:
             pressure = np.abs(pressure) + np.abs(self.initial.pressure)
+        if self.pressure_extent is not None:
+            pressure = np.abs(pressure) + self.pressure_extent
         loaded = np.flatnonzero(pressure)
         if loaded.size == 0:
             return None

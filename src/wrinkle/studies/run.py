@@ -21,9 +21,9 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
+import hashlib
 import json
 import logging
-import math
 import multiprocessing
 import os
 import time
@@ -54,8 +54,8 @@ VARIANT_FILE = "variant.json"
 @dataclass(frozen=True)
 class VariantTask:
     """One variant to run: its number (from 1), the base case file, the read_case overrides
-    that make it, its values {path: value}, its results folder and that folder's name in the
-    study's folder (``folder_name``)."""
+    that make it, its values {path: value}, its results folder, that folder's name in the
+    study's folder (``folder_name``) and the fingerprint of its input (``fingerprint``)."""
 
     number: int
     case: str
@@ -63,6 +63,21 @@ class VariantTask:
     values: dict[str, float]
     folder: str
     name: str
+    fingerprint: str = ""  # of the variant's input (``fingerprint``)
+
+
+def fingerprint(case: Path, base: dict[str, Any], overrides: dict[str, Any]) -> str:
+    """A SHA-256 of a variant's input: the base case file's bytes, the mesh files it names
+    (``[mesh] file`` and ``levels``) and the variant's overrides. A study run again takes a
+    finished variant up only if its input is the same."""
+    digest = hashlib.sha256(case.read_bytes())
+    mesh = base.get("mesh", {}) if isinstance(base.get("mesh"), dict) else {}
+    files = [mesh.get("file")] + list(mesh.get("levels") or [])
+    for name in files:
+        if isinstance(name, str) and (case.parent / name).is_file():
+            digest.update((case.parent / name).read_bytes())
+    digest.update(json.dumps(overrides, sort_keys=True, default=str).encode())
+    return digest.hexdigest()
 
 
 def folder_name(number: int) -> str:
@@ -112,6 +127,8 @@ def run_variant(task: VariantTask) -> dict[str, Any]:
     from wrinkle.solvers import ConvergenceError
 
     start = time.perf_counter()
+    for name in THREAD_VARIABLES:  # for the libraries this worker has not loaded yet
+        os.environ.setdefault(name, "1")
     folder = Path(task.folder)
     status, message, quantities = "converged", "", {}
     with _one_thread():
@@ -136,23 +153,21 @@ def run_variant(task: VariantTask) -> dict[str, Any]:
         "folder": task.name,
     }
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / VARIANT_FILE).write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
+    record = {**row, "fingerprint": task.fingerprint}
+    (folder / VARIANT_FILE).write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     return row
 
 
 def _done(task: VariantTask) -> dict[str, Any] | None:
-    """The row of a variant finished by an earlier run of the study with the same values, or
-    None."""
+    """The row of a variant finished (converged or not) by an earlier run of the study from
+    the same input (the same ``fingerprint``), or None."""
     path = Path(task.folder) / VARIANT_FILE
     try:
         row = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
-    same = all(
-        isinstance(row.get(key), (int, float)) and math.isclose(row[key], value, rel_tol=1e-12)
-        for key, value in task.values.items()
-    )
-    return row if same and row.get("variant") == task.number else None
+    same = row.pop("fingerprint", None) == task.fingerprint and row.get("variant") == task.number
+    return row if same else None
 
 
 @contextlib.contextmanager
@@ -216,20 +231,23 @@ def run_study(
     Dask asked for and missing."""
     if engine not in ENGINES:
         raise StudyError(f"engine {engine!r}: one of {', '.join(ENGINES)}")
-    out = Path(out)
+    out = Path(out).resolve()  # (a remote worker's working folder is not this one)
     out.mkdir(parents=True, exist_ok=True)
     workers = workers or os.cpu_count() or 1
-    tasks = [
-        VariantTask(
-            number,
-            str(study.case),
-            variant_overrides(study.base, values),
-            values,
-            str(out / folder_name(number)),
-            folder_name(number),
+    tasks = []
+    for number, values in enumerate(study.variants, start=1):
+        overrides = variant_overrides(study.base, values)
+        tasks.append(
+            VariantTask(
+                number,
+                str(study.case),
+                overrides,
+                values,
+                str(out / folder_name(number)),
+                folder_name(number),
+                fingerprint(study.case, study.base, overrides),
+            )
         )
-        for number, values in enumerate(study.variants, start=1)
-    ]
     rows: dict[int, dict[str, Any]] = {}
 
     def finished(row: dict[str, Any]) -> None:
@@ -266,11 +284,12 @@ def run_study(
                 client.close()
                 if scheduler is None and cluster is not None:
                     cluster.close()
-        else:
+        else:  # the workers start as tasks are submitted: the variables set meanwhile
             context = multiprocessing.get_context("spawn")
-            with _single_threaded_children():
-                pool = concurrent.futures.ProcessPoolExecutor(workers, mp_context=context)
-            with pool:
+            with (
+                _single_threaded_children(),
+                concurrent.futures.ProcessPoolExecutor(workers, mp_context=context) as pool,
+            ):
                 for future in concurrent.futures.as_completed(
                     [pool.submit(run_variant, task) for task in pending]
                 ):
