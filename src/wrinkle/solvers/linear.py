@@ -215,18 +215,30 @@ class Pardiso:
 
     name = "pardiso"
     #: the most iterative-refinement steps of each solve (MKL's iparm(8)); None keeps MKL's
-    #: default of two, 0 refines only after a factorisation that perturbed pivots. The
-    #: modal solve sets 0: a solve then costs 0.06 s instead of 0.09-0.13 s (148,428
-    #: unknowns, benchmarks/modes.py), its residual 1.3e-14 instead of 7.5e-15.
-    refinement: int | None = None
+    #: default of two, 0 (the default) refines only after a factorisation that perturbed
+    #: pivots. A solve then costs 0.06 s instead of 0.09-0.13 s (148,428 unknowns,
+    #: benchmarks/modes.py), its residual 1.3e-14 instead of 7.5e-15; on the sheared
+    #: rectangle's K + theta M (155,043 unknowns) 0.045 s instead of 0.14 s, relative
+    #: residual 3e-13 (docs/notes/2026-12-rectangle-speed.md).
+    refinement: int | None = 0
+    #: try a Cholesky factorisation (matrix type 2) of a symmetric matrix first, and the
+    #: symmetric indefinite one only if it fails (the matrix is not positive definite); after
+    #: a failure, the next CHOLESKY_PAUSE symmetric matrices go straight to LDL^T (twice as
+    #: many after each further failure). On the
+    #: sheared rectangle's K + theta M (155,043 unknowns) Cholesky took 0.39-0.47 s against
+    #: 0.54-0.71 s (docs/notes/2026-12-rectangle-speed.md).
+    cholesky: bool = True
+    CHOLESKY_PAUSE = 8
 
     def __init__(self):
         _locate_mkl_runtime()
         _no_spin_wait()
         import pypardiso
 
-        self._solvers = {mtype: pypardiso.PyPardisoSolver(mtype=mtype) for mtype in (1, -2)}
-        self._analysed = {mtype: _PatternCache() for mtype in (1, -2)}
+        self._solvers = {mtype: pypardiso.PyPardisoSolver(mtype=mtype) for mtype in (1, -2, 2)}
+        self._analysed = {mtype: _PatternCache() for mtype in (1, -2, 2)}
+        self._cholesky_pause = 0
+        self._cholesky_failures = 0
         # upper_triangle_positions of the pattern in _upper_pattern
         self._upper: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._upper_pattern = _PatternCache()
@@ -240,11 +252,11 @@ class Pardiso:
                 solver.free_memory(everything=True)
             self._analysed[mtype] = _PatternCache()
 
-    def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
+    def factorise(self, A: sp.csr_matrix, symmetric: bool, definite: bool = True) -> Solve | None:
+        """A solve function for A, or None if it is singular. definite=False: a symmetric A
+        is factorised as indefinite at once (``cholesky``; its inertia is then known)."""
         if np.iscomplexobj(A.data):
             return self._fallback.factorise(A, symmetric)
-        from pypardiso.pardiso_wrapper import PyPardisoError
-
         A = A if A.has_sorted_indices else A.sorted_indices()
         M, mtype = A, 1
         if symmetric:
@@ -253,6 +265,21 @@ class Pardiso:
                 upper = self._upper = upper_triangle_positions(A)
             positions, indptr, indices = upper
             M, mtype = sp.csr_matrix((A.data[positions], indices, indptr), shape=A.shape), -2
+            if definite and self.cholesky:
+                if self._cholesky_pause > 0:
+                    self._cholesky_pause -= 1
+                else:
+                    solve = self._factorise(A, M, 2)
+                    if solve is not None:
+                        return solve
+                    self._cholesky_failures += 1
+                    self._cholesky_pause = self.CHOLESKY_PAUSE << min(self._cholesky_failures, 10)
+        return self._factorise(A, M, mtype)
+
+    def _factorise(self, A: sp.csr_matrix, M: sp.csr_matrix, mtype: int) -> Solve | None:
+        """Factorise M (A's upper triangle for the symmetric types) as PARDISO's mtype."""
+        from pypardiso.pardiso_wrapper import PyPardisoError
+
         solver = self._solvers[mtype]
         rhs = np.zeros((A.shape[0], 1))
         try:
@@ -282,7 +309,7 @@ class Pardiso:
     def factorise_with_inertia(self, A: sp.csr_matrix) -> tuple[Solve | None, int | None]:
         """One symmetric indefinite factorisation of A: its solve (None if it fails) and its
         number of negative eigenvalues (``negative_pivots``)."""
-        solve = self.factorise(A, symmetric=True)
+        solve = self.factorise(A, symmetric=True, definite=False)
         if solve is None:
             return None, None
         return solve, int(self._solvers[-2].iparm[22])

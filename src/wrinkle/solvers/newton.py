@@ -54,6 +54,9 @@ class RegularisedNewton(RegularisedSolver):
 
     method = "newton"
     default_max_iterations = 100
+    #: evaluate the shortened steps of ``backtrack`` with the stiffness (False: without it,
+    #: and again with it where one is accepted)
+    backtrack_stiffness = True
 
     def initial_theta(self, K: sp.csr_matrix, free: np.ndarray) -> float:
         self._scale = stiffness_scale(K, free)
@@ -114,8 +117,13 @@ class RegularisedNewton(RegularisedSolver):
             if predicted <= 0.0:
                 continue
             shorter = u + fraction * step
-            trial = try_evaluate(problem, shorter, stiffness=False)
+            # with the stiffness at once: the shortened step is accepted more often than not,
+            # and the stiffness adds less to an evaluation than a second evaluation costs
+            # (102,400 elements: 0.21 s with it, 0.14 s without)
+            trial = try_evaluate(problem, shorter, stiffness=self.backtrack_stiffness)
             if trial is not None and ev.energy - trial.energy >= _SUFFICIENT * predicted:
+                if trial.stiffness is not None:
+                    return shorter, trial
                 evaluation = try_evaluate(problem, shorter)
                 return None if evaluation is None else (shorter, evaluation)
         return None
