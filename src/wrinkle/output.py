@@ -445,7 +445,7 @@ class ResultWriter:
         if self.analysis_steps is None:
             return {}
         number = int(getattr(step, "analysis_step", 1))
-        return {"analysis_step": number, "time": number - 1 + float(step.load_factor)}
+        return {"analysis_step": number, "time": float(getattr(step, "time", step.load_factor))}
 
     def _quantities(
         self,
