@@ -152,6 +152,40 @@ def _study(args: argparse.Namespace) -> int:
     return 0
 
 
+def _fit(args: argparse.Namespace) -> int:
+    from wrinkle.identification import read_fit, run_fit, write_report
+    from wrinkle.identification.fit import DaskEngine, LocalEngine
+
+    problem = read_fit(args.fit)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out}: is a file, not a folder for the fit")
+    engine: LocalEngine | DaskEngine = LocalEngine()
+    if args.scheduler is not None or (args.workers or 1) > 1:
+        from wrinkle.studies.run import dask_client
+
+        client = dask_client(args.scheduler, args.workers or 1, required=True)
+        engine = DaskEngine(client, owns_cluster=args.scheduler is None)
+
+    def progress(row: dict) -> None:
+        if not args.quiet:
+            values = ", ".join(f"{k} = {v:.6g}" for k, v in row["parameters"].items())
+            state = "  (a solve failed)" if row["failed"] else ""
+            print(
+                f"evaluation {row['evaluation']:3d}  cost {row['cost']:.4e}  {values}{state}",
+                file=sys.stderr,
+            )
+
+    result = run_fit(problem, engine, on_evaluation=progress)
+    write_report(result, out)
+    if not args.quiet:
+        print(f"wrote {out}/fit.json: {result.message}", file=sys.stderr)
+    if not result.converged:
+        print(f"wrinkle: the fit did not converge: {result.message}", file=sys.stderr)
+        return 1
+    return 0
+
+
 def _show(args: argparse.Namespace) -> int:
     from wrinkle.show import show_results
 
@@ -206,6 +240,20 @@ def main(argv: list[str] | None = None) -> int:
     )
     study.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     study.set_defaults(run=_study)
+    fit = sub.add_parser("fit", help="identify case parameters from measured curves (docs/fit.md)")
+    fit.add_argument("fit", help="fit file (TOML)")
+    fit.add_argument("--out", default="fit", help="output directory")
+    fit.add_argument(
+        "--scheduler",
+        default=None,
+        help="address of a Dask scheduler (tcp://HOST:PORT) to solve the experiments on; "
+        "default: this process",
+    )
+    fit.add_argument(
+        "--workers", type=int, default=None, help="a local Dask cluster of this many workers"
+    )
+    fit.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    fit.set_defaults(run=_fit)
     show = sub.add_parser(
         "show", help="interactive view of the last step (needs pyvista: wrinkle[viz])"
     )

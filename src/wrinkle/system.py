@@ -936,14 +936,20 @@ class StepProblem:
         self.motion_force: float | None = None
 
     def evaluate(
-        self, u: np.ndarray, stiffness: bool = True, lift: np.ndarray | None = None
+        self,
+        u: np.ndarray,
+        stiffness: bool = True,
+        lift: np.ndarray | None = None,
+        keep_constrained: bool = False,
     ) -> Evaluation:
         """Residual, energy, element states and (``stiffness``) the tangent at u, (n_dofs,).
 
         lift: (n_dofs,) an increment of the constrained components (zero elsewhere); the
         residual is then the out-of-balance force linearised at u + lift,
         f - f*(u) - K lift on the free rows, from the tangent K at u before its constrained
-        rows and columns are replaced (needs ``stiffness``).
+        rows and columns are replaced (needs ``stiffness``). keep_constrained: return the
+        whole tangent d(f* - f)/du, its constrained rows and columns kept (the sensitivities
+        of the reactions, ``wrinkle.identification.sensitivity``).
         """
         system, timer = self.system, self.timer
         pattern = system.pattern
@@ -1009,8 +1015,9 @@ class StepProblem:
                 if lift is not None:
                     coupling = pattern.matrix(data) @ lift
                     residual = np.where(self.free, residual - coupling, 0.0)
-                data[self._constraint_positions] = 0.0
-                data[self._constrained_diagonal] = 1.0
+                if not keep_constrained:
+                    data[self._constraint_positions] = 0.0
+                    data[self._constrained_diagonal] = 1.0
                 K = pattern.matrix(data)
         return Evaluation(
             residual,

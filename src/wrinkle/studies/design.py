@@ -37,6 +37,7 @@ __all__ = [
     "Parameter",
     "Study",
     "StudyError",
+    "get_path",
     "quantity_names",
     "read_study",
     "set_path",
@@ -124,7 +125,7 @@ def set_path(data: dict[str, Any], path: str, value: float) -> None:
     value where the case has an integer, or nothing, is set as an integer.
     ValueError naming the part of the path that is missing."""
     container, key = _container(data, _path_parts(path))
-    present = container[int(key)] if isinstance(container, list) else container.get(key)
+    present = get_path(data, path)
     if isinstance(present, (dict, list)):
         raise ValueError(f"'{path}' is a table or a list, not a number")
     whole = isinstance(present, int) or present is None  # (a bool is an int, and not whole)
@@ -132,6 +133,13 @@ def set_path(data: dict[str, Any], path: str, value: float) -> None:
         container[key] = int(value)  # an integer key (steps, nx, max_iterations) stays one
     else:
         container[key] = value
+
+
+def get_path(data: dict[str, Any], path: str) -> Any:
+    """The value at the dotted ``path`` of the TOML data ``data`` (None where the table has
+    no such key). ValueError naming the part of the path that is missing."""
+    container, key = _container(data, _path_parts(path))
+    return container[int(key)] if isinstance(container, list) else container.get(key)
 
 
 def variant_overrides(base: dict[str, Any], assignment: dict[str, float]) -> dict[str, Any]:

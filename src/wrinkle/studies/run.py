@@ -35,7 +35,7 @@ from typing import Any
 
 from wrinkle.studies.design import BOOKKEEPING, Study, StudyError, variant_overrides
 
-__all__ = ["ENGINES", "THREAD_VARIABLES", "VariantTask", "run_study", "run_variant"]
+__all__ = ["ENGINES", "THREAD_VARIABLES", "VariantTask", "dask_client", "run_study", "run_variant"]
 
 # where the variants run (``run_study``): "auto" is Dask where installed or given a scheduler,
 # else local processes, and this process for one worker
@@ -185,7 +185,7 @@ def _single_threaded_children() -> Iterator[None]:
                 os.environ[name] = value
 
 
-def _dask_client(scheduler: str | None, workers: int, required: bool):
+def dask_client(scheduler: str | None, workers: int, required: bool):
     """A ``distributed.Client`` of the cluster at ``scheduler``, or of a LocalCluster of
     ``workers`` single-threaded processes; None without Dask unless ``required``.
     StudyError for an address that does not answer or Dask missing where required."""
@@ -271,7 +271,7 @@ def run_study(
         client = None
         if engine == "dask":
             with _single_threaded_children():
-                client = _dask_client(scheduler, workers, required=scheduler is not None)
+                client = dask_client(scheduler, workers, required=scheduler is not None)
         if client is not None:
             from distributed import as_completed
 

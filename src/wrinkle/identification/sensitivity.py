@@ -1,0 +1,267 @@
+"""Measured quantities along a load path and their derivatives by the adjoint method.
+
+An experiment's case is solved under load control to the load factors of its measured points,
+one after the other (each from the state at the one before: ``LoadSegment``), and at each
+converged state u the model's measured quantities are read. A quantity is linear in the
+displacements or in the support reactions: q = c . u (a probe's mean displacement component,
+``<probe>_ux``) or q = c . R_c (the sum of a support's reactions in one direction,
+``<support>_Fx``), with R(u, p) = f*(u, p) - f(u, p) the internal minus the external forces
+and c (n_dofs,) the quantity's weights (``Functional``).
+
+Balance R_f(u, p) = 0 on the free components fixes u(p). With the tangent K = dR/du, the
+derivative of q with respect to a parameter p is, by the adjoint method (one solve per quantity
+with the tangent factorised once per state, whatever the number of parameters),
+
+    K_ff^T z = dq/du_f            (dq/du_f = c_f for a displacement, (K^T c)_f for a reaction)
+    dq/dp    = c . dR_c/dp - z . dR_f/dp     (the first term for a reaction only)
+
+where dR/dp is the change of the forces at fixed displacements: the derivative of the element
+forces (and of the loads, if they depend on p) with respect to the parameter, here by central
+differences of R(u, p +- h) (``force_derivatives``), which take no solve and, R being smooth in
+p at a fixed state of every element, are exact to about h^2 (h = 1e-5 of the parameter).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from wrinkle.case import Case
+from wrinkle.solvers import ConvergenceError
+from wrinkle.solvers.linear import make_linear_solver
+from wrinkle.solvers.stepping import StepController, SteppedProblem, follow_load_path
+from wrinkle.system import DiscreteSystem
+
+__all__ = [
+    "Functional",
+    "LoadSegment",
+    "State",
+    "adjoint_gradients",
+    "force_derivatives",
+    "functional",
+    "quantity_names",
+    "quantity_values",
+    "solve_to",
+]
+
+COMPONENTS = "xyz"
+# a free component whose tangent row is below this fraction of the largest has no stiffness
+IDLE_STIFFNESS = 1e-12
+# the adjoint solve must satisfy its equations to this fraction of the right-hand side
+CONSISTENT = 1e-6
+
+
+@dataclass(frozen=True)
+class Functional:
+    """A measured model quantity q = weights . v with v the displacements (``of_reactions``
+    False) or the reactions R = f* - f at the constrained components (True); weights
+    (n_dofs,)."""
+
+    name: str
+    weights: np.ndarray
+    of_reactions: bool
+
+
+def quantity_names(case: Case) -> list[str]:
+    """The quantities an experiment may measure: ``<support>_Fx/_Fy/_Fz`` for each support
+    label and ``<probe>_ux/_uy/_uz`` for each probe (the history.csv columns of the same
+    names)."""
+    labels = dict.fromkeys(str(support.label) for support in case.model.supports)
+    names = [f"{label}_F{c}" for label in labels for c in COMPONENTS]
+    return names + [f"{probe}_u{c}" for probe in case.probes for c in COMPONENTS]
+
+
+def functional(case: Case, name: str) -> Functional:
+    """The ``Functional`` of the quantity ``name`` (``quantity_names``) in ``case``:
+    reactions summed over the distinct dofs a support label holds in that direction (as
+    history.csv's ``_F`` columns), a probe's mean displacement (``_u`` columns). ValueError
+    naming the known quantities for any other name."""
+    n_dofs = case.model.n_dofs
+    weights = np.zeros(n_dofs)
+    stem, _, component = name.rpartition("_")
+    if len(component) == 2 and component[1] in COMPONENTS:
+        axis = COMPONENTS.index(component[1])
+        if component[0] == "F":
+            held = [np.asarray(s.dofs).ravel() for s in case.model.supports if str(s.label) == stem]
+            if held:
+                dofs = np.unique(np.concatenate(held)).astype(np.int64)
+                weights[dofs[dofs % 3 == axis]] = 1.0
+                return Functional(name, weights, True)
+        elif component[0] == "u" and stem in case.probes:
+            nodes = np.asarray(case.probes[stem], dtype=np.int64)
+            weights[3 * nodes + axis] = 1.0 / nodes.size
+            return Functional(name, weights, False)
+    raise ValueError(
+        f"{name!r} is not a quantity of the case (quantities: {', '.join(quantity_names(case))})"
+    )
+
+
+class LoadSegment:
+    """The load levels between load factors ``start`` and ``end`` of ``system``, as a path
+    from 0 to 1 (``wrinkle.solvers.stepping.LoadLevels``): level t is the system's load factor
+    start + t (end - start)."""
+
+    def __init__(self, system: DiscreteSystem, start: float, end: float):
+        self.system = system
+        self.start = start
+        self.end = end
+        self.n_dofs = system.n_dofs
+
+    def at(self, load_factor: float = 1.0, prescribed: np.ndarray | None = None) -> SteppedProblem:
+        return self.system.at(self.start + load_factor * (self.end - self.start), prescribed)
+
+
+@dataclass
+class State:
+    """A converged state: the load factor and the displacements u (n_dofs,)."""
+
+    load_factor: float
+    u: np.ndarray
+    iterations: int = 0
+
+
+@dataclass
+class _Counter:
+    iterations: int = 0
+
+
+def solve_to(
+    case: Case, system: DiscreteSystem, load_factors: Sequence[float] | np.ndarray
+) -> list[State]:
+    """The converged states at the increasing ``load_factors`` (each > 0), by load control
+    with the case's solver settings: each segment from the state before (the first from the
+    reference state) with the step controller's cut-backs inside it. Raises ConvergenceError
+    where a segment cannot be solved."""
+    settings = case.settings
+    solver = settings.solver()
+    controller = StepController(
+        first_step=1.0,
+        min_step=settings.min_step,
+        max_step=1.0,
+        cutback=settings.cutback,
+        growth=settings.growth,
+        target_iterations=settings.target_iterations,
+        look_ahead=settings.look_ahead,
+    )
+    states: list[State] = []
+    u = np.zeros(system.n_dofs)
+    reached = 0.0
+    try:
+        for factor in load_factors:
+            counter = _Counter()
+
+            def count(_t: float, _u: np.ndarray, solved, counter: _Counter = counter) -> None:
+                counter.iterations += solved.iterations
+
+            u = follow_load_path(
+                LoadSegment(system, reached, float(factor)),
+                solver,
+                controller,
+                u0=u,
+                on_step=count,
+                stability=system.encloses_volume,
+            )
+            states.append(State(float(factor), u.copy(), counter.iterations))
+            reached = float(factor)
+    except ConvergenceError as error:
+        raise ConvergenceError(
+            f"the load path failed between load factors {reached:.6g} and {factor:.6g}: {error}",
+            error.history,
+        ) from None
+    finally:
+        solver.release()
+    return states
+
+
+def _balance_forces(system: DiscreteSystem, state: State) -> np.ndarray:
+    """R = f* - f at the state, every component, (n_dofs,) (one evaluation, no tangent)."""
+    evaluation = system.at(state.load_factor).evaluate(state.u, stiffness=False)
+    reactions = evaluation.reactions if evaluation.reactions is not None else 0.0
+    return np.where(system.constrained, reactions, -evaluation.residual)
+
+
+def quantity_values(
+    system: DiscreteSystem, state: State, functionals: Sequence[Functional]
+) -> np.ndarray:
+    """The quantities at a converged state, (n_quantities,)."""
+    needs_reactions = any(f.of_reactions for f in functionals)
+    R = _balance_forces(system, state) if needs_reactions else None
+    return np.array(
+        [f.weights @ (R if f.of_reactions and R is not None else state.u) for f in functionals]
+    )
+
+
+def force_derivatives(
+    state: State,
+    perturbed: Sequence[tuple[DiscreteSystem, DiscreteSystem, float]],
+) -> np.ndarray:
+    """dR/dp at fixed displacements, (n_dofs, n_parameters): for each parameter the systems
+    made with it at p + h and p - h, and h; (R(u, p + h) - R(u, p - h)) / (2 h)."""
+    columns = [
+        (_balance_forces(plus, state) - _balance_forces(minus, state)) / (2.0 * h)
+        for plus, minus, h in perturbed
+    ]
+    return np.stack(columns, axis=1) if columns else np.zeros((state.u.size, 0))
+
+
+def adjoint_gradients(
+    system: DiscreteSystem,
+    state: State,
+    functionals: Sequence[Functional],
+    dR: np.ndarray,
+    linear_solver: str = "auto",
+) -> np.ndarray:
+    """dq/dp of every quantity at a converged state (module docstring), (n_quantities,
+    n_parameters), from dR/dp (n_dofs, n_parameters) (``force_derivatives``): the tangent at
+    the state is factorised once (``linear_solver``, ``wrinkle.solvers.linear``) and each
+    quantity takes one solve with its transpose.
+
+    Free components that no element stiffens (the nodes of a wholly slack region: rows of
+    the tangent zero to round-off) move without force and change no reaction; the solve
+    leaves them out (their z is zero), where K_ff alone would be singular. ConvergenceError
+    if the tangent on the others is singular (a mechanism the supports allow)."""
+    evaluation = system.at(state.load_factor).evaluate(state.u, keep_constrained=True)
+    K = evaluation.stiffness
+    assert K is not None
+    K = sp.csr_matrix(K)
+    size = abs(K).max(axis=1).toarray().ravel()
+    active = ~system.constrained & (size > IDLE_STIFFNESS * max(float(size.max()), 1e-300))
+    keep = sp.diags(active.astype(float))
+    # K on the active components, the identity on the others: K_aa^T z_a = b_a
+    reduced = (
+        keep @ (K.T if not evaluation.symmetric else K) @ keep + sp.diags((~active).astype(float))
+    ).tocsr()
+    reduced.sort_indices()
+    backend = make_linear_solver(linear_solver, system.n_dofs)
+    try:
+        solve = backend.factorise(reduced, bool(evaluation.symmetric))
+        if solve is None:
+            raise ConvergenceError(
+                "the tangent at a converged state is singular: the supports leave a "
+                f"mechanism (load factor {state.load_factor:.6g}); no gradient",
+                [],
+            )
+        gradients = np.empty((len(functionals), dR.shape[1]))
+        for row, f in enumerate(functionals):
+            if f.of_reactions:
+                along = K.T @ f.weights
+                explicit = f.weights @ dR
+            else:
+                along = f.weights.copy()
+                explicit = np.zeros(dR.shape[1])
+            along[~active] = 0.0
+            z = np.real(solve(along)) if np.any(along) else np.zeros(system.n_dofs)
+            if np.linalg.norm(reduced @ z - along) > CONSISTENT * np.linalg.norm(along):
+                raise ConvergenceError(
+                    f"{f.name}: no gradient at load factor {state.load_factor:.6g}: the "
+                    "quantity moves with a motion the membrane does not resist (a slack or "
+                    "wrinkled free edge); measure it where the membrane is held taut",
+                    [],
+                )
+            gradients[row] = explicit - z[active] @ dR[active]
+    finally:
+        backend.release()
+    return gradients
