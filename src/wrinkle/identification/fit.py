@@ -57,6 +57,7 @@ __all__ = [
     "LocalEngine",
     "run_fit",
     "solve_experiment",
+    "tasks_for",
 ]
 
 # the central-difference step of dR/dp at fixed displacements, relative to the parameter's
@@ -286,6 +287,21 @@ class FitResult:
     history: list[dict[str, Any]] = field(default_factory=list)
 
 
+def tasks_for(
+    problem: FitProblem, assignment: dict[str, float], adjoint: bool = True
+) -> list[ExperimentTask]:
+    """The problem's experiments at the parameter values ``assignment``, each with its
+    adjoint paths and force-derivative steps (or none: the values only)."""
+    paths = tuple(p.path for p in problem.parameters if p.gradient == "adjoint")
+    steps = tuple(FORCE_STEP * p.scale for p in problem.parameters if p.gradient == "adjoint")
+    return [
+        ExperimentTask(
+            e, assignment, problem.tolerance, paths if adjoint else (), steps if adjoint else ()
+        )
+        for e in problem.experiments
+    ]
+
+
 def _scales(experiment: Experiment) -> np.ndarray:
     """The size of each measured column, max |m| (1 where a column is all zero),
     (n_quantities,)."""
@@ -331,7 +347,6 @@ def run_fit(
     adjoint_paths = tuple(p.path for p in parameters if p.gradient == "adjoint")
     adjoint_columns = [paths.index(path) for path in adjoint_paths]
     difference_columns = [j for j, p in enumerate(parameters) if p.gradient != "adjoint"]
-    steps = tuple(FORCE_STEP * parameters[paths.index(path)].scale for path in adjoint_paths)
     experiments = problem.experiments
     sizes = [_scales(e) for e in experiments]
     counts = [e.measured.size for e in experiments]
@@ -343,16 +358,7 @@ def run_fit(
         return {path: float(v) for path, v in zip(paths, theta * scale, strict=True)}
 
     def tasks_at(assignment: dict[str, float], adjoint: bool = True) -> list[ExperimentTask]:
-        return [
-            ExperimentTask(
-                e,
-                assignment,
-                problem.tolerance,
-                adjoint_paths if adjoint else (),
-                steps if adjoint else (),
-            )
-            for e in experiments
-        ]
+        return tasks_for(problem, assignment, adjoint)
 
     def residual_of(answers: list[ExperimentAnswer]) -> np.ndarray | None:
         parts = []
