@@ -193,6 +193,13 @@ def _show(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cluster_options(parser: argparse.ArgumentParser, scheduler: str, workers: str) -> None:
+    """--scheduler, --workers and --quiet of the commands that may run on a Dask cluster."""
+    parser.add_argument("--scheduler", default=None, help=scheduler)
+    parser.add_argument("--workers", type=int, default=None, help=workers)
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="wrinkle", description="Finite-element analysis of wrinkling membranes."
@@ -229,30 +236,22 @@ def main(argv: list[str] | None = None) -> int:
     study = sub.add_parser("study", help="run the variants of a parameter study (docs/studies.md)")
     study.add_argument("study", help="study file (TOML)")
     study.add_argument("--out", default="study", help="output directory")
-    study.add_argument(
-        "--scheduler",
-        default=None,
-        help="address of a Dask scheduler (tcp://HOST:PORT); default: a local cluster of "
-        "the machine's cores (local processes without Dask)",
+    _cluster_options(
+        study,
+        "address of a Dask scheduler (tcp://HOST:PORT); default: a local cluster of the "
+        "machine's cores (local processes without Dask)",
+        "local worker processes (default: the cores)",
     )
-    study.add_argument(
-        "--workers", type=int, default=None, help="local worker processes (default: the cores)"
-    )
-    study.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     study.set_defaults(run=_study)
     fit = sub.add_parser("fit", help="identify case parameters from measured curves (docs/fit.md)")
     fit.add_argument("fit", help="fit file (TOML)")
     fit.add_argument("--out", default="fit", help="output directory")
-    fit.add_argument(
-        "--scheduler",
-        default=None,
-        help="address of a Dask scheduler (tcp://HOST:PORT) to solve the experiments on; "
+    _cluster_options(
+        fit,
+        "address of a Dask scheduler (tcp://HOST:PORT) to solve the experiments on; "
         "default: this process",
+        "a local Dask cluster of this many workers",
     )
-    fit.add_argument(
-        "--workers", type=int, default=None, help="a local Dask cluster of this many workers"
-    )
-    fit.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     fit.set_defaults(run=_fit)
     show = sub.add_parser(
         "show", help="interactive view of the last step (needs pyvista: wrinkle[viz])"

@@ -145,6 +145,15 @@ def _case_data(path: Path, where: str, fail) -> dict[str, Any]:
     return data
 
 
+def _check_keys(table: Any, where: str, keys: set[str], fail) -> None:
+    """Fail unless ``table`` is a table of some of ``keys``."""
+    if not isinstance(table, dict):
+        fail(where, "must be a table")
+    unknown = sorted(set(table) - keys)
+    if unknown:
+        fail(where, f"unknown key '{unknown[0]}' (keys: {', '.join(sorted(keys))})")
+
+
 def _read_columns(path: Path, names: list[str], where: str, fail) -> dict[str, np.ndarray]:
     """The named columns of a measured CSV file (a header row, then numbers)."""
     try:
@@ -178,11 +187,7 @@ def _read_columns(path: Path, names: list[str], where: str, fail) -> dict[str, n
 def _read_experiment(
     table: Any, where: str, folder: Path, default_case: Path | None, fail
 ) -> Experiment:
-    if not isinstance(table, dict):
-        fail(where, "must be a table")
-    unknown = sorted(set(table) - EXPERIMENT_KEYS)
-    if unknown:
-        fail(where, f"unknown key '{unknown[0]}' (keys: {', '.join(sorted(EXPERIMENT_KEYS))})")
+    _check_keys(table, where, EXPERIMENT_KEYS, fail)
     name = table.get("name", where)
     if not isinstance(name, str) or not name:
         fail(where, f"'name' must be a text, got {name!r}")
@@ -276,11 +281,7 @@ def _same_discretisation(one: Case, other: Case) -> bool:
 def _read_parameter(
     table: Any, where: str, experiments: list[Experiment], tolerance: float, fail
 ) -> FitParameter:
-    if not isinstance(table, dict):
-        fail(where, "must be a table")
-    unknown = sorted(set(table) - PARAMETER_KEYS)
-    if unknown:
-        fail(where, f"unknown key '{unknown[0]}' (keys: {', '.join(sorted(PARAMETER_KEYS))})")
+    _check_keys(table, where, PARAMETER_KEYS, fail)
     path = table.get("path")
     if not isinstance(path, str):
         fail(where, f"'path' must be a dotted path such as \"material.E_L\", got {path!r}")
