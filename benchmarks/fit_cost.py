@@ -2,26 +2,46 @@
 (issue 23: at most 1.3 times, the point of adjoint gradients).
 
 The fit of examples/fit (four parameters of the fibre-reinforced sheet, one experiment of
-eight measured states, 256 elements) is run ``--repeats`` times, in turns with the same
-number of forward solves of its experiment at the start values; the table gives the medians:
+eight measured states) on sheets of ``--nx`` x nx/2 squares, to the noise-free data of each,
+is run ``--repeats`` times, in turns with as many forward solves of its experiment at the
+start values; the table gives the medians:
 the fit's seconds per Jacobian (an optimiser iteration: its residual evaluations and one
 Jacobian), the seconds of one forward solve, their ratio, and the part the adjoint
 gradients take of a Jacobian evaluation.
 
-    python benchmarks/fit_cost.py [--repeats 3]
+    python benchmarks/fit_cost.py [--repeats 3] [--nx 16 40]
 """
 
 from __future__ import annotations
 
 import argparse
+import shutil
 import statistics
+import tempfile
 import time
 from pathlib import Path
 
+from wrinkle import read_case
 from wrinkle.identification import read_fit, run_fit
 from wrinkle.identification.fit import LocalEngine, tasks_for
 
 FIT = Path(__file__).resolve().parents[1] / "examples" / "fit" / "fit.toml"
+
+
+def fit_on_mesh(folder: Path, nx: int) -> Path:
+    """The example's fit on a sheet of nx x nx/2 squares, its data the noise-free history of
+    that sheet at the true values (a ``wrinkle run``)."""
+    for name in ("fit.toml", "sheet.toml"):
+        shutil.copy(FIT.parent / name, folder / name)
+    sheet = folder / "sheet.toml"
+    sheet.write_text(sheet.read_text().replace("nx = 16, ny = 8", f"nx = {nx}, ny = {nx // 2}"))
+    read_case(sheet).run(folder / "run")
+    fit = folder / "fit.toml"
+    text = fit.read_text().replace('data = "measured.csv"', 'data = "run/history.csv"')
+    text = text.replace('x = "pull_mm"\nfull_load = 4.0', 'x = "load_factor"')
+    text = text.replace('y = ["Fx_N", "Fy_N", "ux_mm", "uy_mm"]\n', "")
+    fit.write_text(text.replace("quantity = [", "y = ["))
+    return fit
 
 
 class TimedEngine(LocalEngine):
@@ -50,10 +70,20 @@ class TimedEngine(LocalEngine):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--nx", type=int, nargs="+", default=[16, 40])
     args = parser.parse_args()
-    problem = read_fit(FIT)
+    print(
+        f"{'elements':>8} {'states':>6} {'evals':>5} {'jacs':>4} {'forward [s]':>11} "
+        f"{'fit/iteration [s]':>17} {'ratio':>6} {'adjoint/iteration [s]':>21}"
+    )
+    for nx in args.nx:
+        with tempfile.TemporaryDirectory() as scratch:
+            row(read_fit(fit_on_mesh(Path(scratch), nx)), args.repeats, nx)
+
+
+def row(problem, repeats: int, nx: int) -> None:
     forward, per_iteration, adjoint_part, counts = [], [], [], []
-    for _ in range(args.repeats):
+    for _ in range(repeats):
         started = time.perf_counter()
         LocalEngine().forward(tasks_for(problem, problem.start, adjoint=False))
         forward.append(time.perf_counter() - started)
@@ -67,16 +97,10 @@ def main() -> None:
     one = statistics.median(forward)
     iteration = statistics.median(per_iteration)
     print(
-        f"fit of {FIT.name}: {problem.experiments[0].x.size} states, "
-        f"{len(problem.parameters)} parameters; evaluations, jacobians: {counts[0]}"
-    )
-    print(
-        f"{'forward solve [s]':>18} {'fit per iteration [s]':>22} {'ratio':>6} "
-        f"{'adjoint per iteration [s]':>26}"
-    )
-    print(
-        f"{one:18.3f} {iteration:22.3f} {iteration / one:6.2f} "
-        f"{statistics.median(adjoint_part):26.3f}"
+        f"{2 * nx * (nx // 2):8d} {problem.experiments[0].x.size:6d} {counts[0][0]:5d} "
+        f"{counts[0][1]:4d} {one:11.3f} {iteration:17.3f} {iteration / one:6.2f} "
+        f"{statistics.median(adjoint_part):21.3f}",
+        flush=True,
     )
 
 

@@ -178,7 +178,9 @@ def solve_to(
 
 def _balance_forces(system: DiscreteSystem, state: State) -> np.ndarray:
     """R = f* - f at the state, every component, (n_dofs,) (one evaluation, no tangent)."""
-    evaluation = system.at(state.load_factor).evaluate(state.u, stiffness=False)
+    problem = system.at(state.load_factor, system.prescribed_at(state.load_factor))
+    problem.motion_force = 0.0  # (the force scale, which takes a solve, is not wanted here)
+    evaluation = problem.evaluate(state.u, stiffness=False)
     reactions = evaluation.reactions if evaluation.reactions is not None else 0.0
     return np.where(system.constrained, reactions, -evaluation.residual)
 
