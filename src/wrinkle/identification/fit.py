@@ -334,7 +334,7 @@ def run_fit(
 ) -> FitResult:
     """Fit the problem's parameters to its experiments (the module docstring), in
     ``engine`` (this process by default), ``on_evaluation`` called after each residual
-    evaluation with {"evaluation", "cost", "parameters"}. Raises ConvergenceError if the
+    evaluation with {"evaluation", "cost", "parameters", "failed"}. Raises ConvergenceError if the
     start itself cannot be solved."""
     from scipy.optimize import least_squares
     from scipy.stats import t as student
