@@ -224,13 +224,10 @@ def test_fit_with_one_percent_noise_lands_within_its_intervals(tmp_path):
     assert 0.5e-2 < result.rms["pull and shear"] < 1.5e-2
 
 
-def test_fit_of_a_neo_hookean_mu_to_the_sphere_s_closed_form(tmp_path):
-    """The octant of an inflated neo-Hookean sphere (R = 0.1 m, T = 1 mm): its pole's rise
-    (lambda - 1) R at eight pressures of the closed form p(lambda) = (2 mu T / R)(1/lambda -
-    lambda^-7) with mu = 0.4 MPa, lambda from 1.05 to 1.3 (Adkins & Rivlin 1952;
-    verification/references/sphere.py). From mu = 0.52 MPa (30 % above: below about 0.39 MPa
-    the largest pressure is past the sphere's limit point, and those trial points fail) the
-    fit finds mu to the discretisation error of the faceted sphere, falling as (h/R)^2."""
+def sphere_fit(tmp_path: Path, start: float) -> Path:
+    """A fit of the neo-Hookean octant's mu (verification/cases/sphere.toml at n = 8, a
+    probe at its pole) to the pole's rise (lambda - 1) R at eight pressures of the closed
+    form, lambda from 1.05 to 1.3, mu = 0.4 MPa; from ``start``."""
     case = (ROOT / "verification" / "cases" / "sphere.toml").read_text()
     case = case.replace("n = 32", "n = 8") + '\n[[probe]]\nname = "pole"\nnodes = "z > 0.0999"\n'
     (tmp_path / "sphere.toml").write_text(case)
@@ -243,15 +240,35 @@ def test_fit_of_a_neo_hookean_mu_to_the_sphere_s_closed_form(tmp_path):
         writer.writerows(zip(pressures, (stretches - 1.0) * 0.1, strict=True))
     (tmp_path / "fit.toml").write_text(
         'case = "sphere.toml"\ntolerance = 1e-9\n'
-        '[[parameter]]\npath = "material.mu"\nstart = 5.2e5\nbounds = [1e4, 1e7]\n'
+        f'[[parameter]]\npath = "material.mu"\nstart = {start!r}\nbounds = [1e4, 1e7]\n'
         '[[experiment]]\nname = "inflation"\ndata = "inflation.csv"\nx = "pressure"\n'
         "full_load = 4878.915624412286\n"  # the case's pressure: x / full_load = its load factor
         'y = "rise"\nquantity = "pole_uz"\n'
     )
-    result = run_fit(read_fit(tmp_path / "fit.toml"))
+    return tmp_path / "fit.toml"
+
+
+def test_fit_of_a_neo_hookean_mu_to_the_sphere_s_closed_form(tmp_path):
+    """The octant of an inflated neo-Hookean sphere (R = 0.1 m, T = 1 mm): its pole's rise
+    (lambda - 1) R at eight pressures of the closed form p(lambda) = (2 mu T / R)(1/lambda -
+    lambda^-7) with mu = 0.4 MPa, lambda from 1.05 to 1.3 (Adkins & Rivlin 1952;
+    verification/references/sphere.py). From mu = 0.52 MPa (30 % above: below about 0.39 MPa
+    the largest pressure is past the sphere's limit point, and those trial points fail) the
+    fit finds mu to the discretisation error of the faceted sphere, falling as (h/R)^2."""
+    result = run_fit(read_fit(sphere_fit(tmp_path, 5.2e5)))
     assert result.converged
     # measured 2026-12-04: -1.67 % at n = 8, -0.84 % at n = 12 (ratio 2.0; (12/8)^2 = 2.25)
     assert result.parameters["material.mu"] == pytest.approx(4e5, rel=2.5e-2)
+
+
+def test_a_start_that_cannot_be_solved_exits_1(tmp_path, capsys):
+    """From mu = 0.3 MPa the largest pressure is past the sphere's limit point: the fit
+    says so in one line and exits 1, writing no report."""
+    path = sphere_fit(tmp_path, 3.0e5)
+    assert main(["fit", str(path), "--out", str(tmp_path / "out"), "-q"]) == 1
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "the start values cannot be solved" in error
+    assert not (tmp_path / "out" / "fit.json").exists()
 
 
 def test_dask_engine_gives_the_same_fit(tmp_path):
