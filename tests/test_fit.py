@@ -32,6 +32,7 @@ from wrinkle.identification.sensitivity import (
     quantity_values,
     solve_to,
 )
+from wrinkle.solvers import ConvergenceError
 from wrinkle.studies.design import variant_overrides
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -156,6 +157,24 @@ def test_adjoint_gradients_equal_finite_differences_of_re_solves(tmp_path, kind)
         assert np.any(significant)
         error = np.abs(adjoint[:, j] - differences[:, j])[significant]
         assert np.all(error <= 1e-6 * np.abs(differences[:, j])[significant]), (p, error)
+
+
+def test_a_probe_on_a_free_wrinkled_edge_has_no_gradient(tmp_path):
+    """The wrinkled sheet's free edges have flat directions (the tangent is singular there:
+    their nodes move without force, and re-solves put them anywhere): a probe that takes
+    them in (x == 12 from edge to edge) gets no gradient, and says why."""
+    text = SHEET.format(supports=WRINKLED).replace("x == 12 and y > 0 and y < 20", "x == 12")
+    path = tmp_path / "sheet.toml"
+    path.write_text(text)
+    case = read_case(path)
+    system = case.model.discretise()
+    state = solve_to(case, system, [0.5, 1.0])[-1]
+    other = read_case(path, variant_overrides(read_case_data(path), {"material.E_L": 50.01}))
+    perturbed = [(other.model.discretise(), system, 0.01)]
+    with pytest.raises(ConvergenceError, match="does not resist"):
+        adjoint_gradients(
+            system, state, [functional(case, "quarter_ux")], force_derivatives(state, perturbed)
+        )
 
 
 def synthetic_fit(tmp_path: Path, noise: float, seed: int = 2) -> Path:
