@@ -153,7 +153,7 @@ def _study(args: argparse.Namespace) -> int:
 
 
 def _fit(args: argparse.Namespace) -> int:
-    from wrinkle.identification import read_fit, run_fit, write_report
+    from wrinkle.identification import read_fit, run_fit, write_picture, write_report
     from wrinkle.identification.fit import DaskEngine, LocalEngine
 
     problem = read_fit(args.fit)
@@ -178,6 +178,10 @@ def _fit(args: argparse.Namespace) -> int:
 
     result = run_fit(problem, engine, on_evaluation=progress)
     write_report(result, out)
+    try:
+        write_picture(result, out)
+    except ImportError as error:  # matplotlib missing: the numbers stand
+        print(f"wrinkle: no picture: {error}", file=sys.stderr)
     if not args.quiet:
         print(f"wrote {out}/fit.json: {result.message}", file=sys.stderr)
     if not result.converged:

@@ -118,6 +118,9 @@ def _forward(task: ExperimentTask) -> tuple[ExperimentAnswer, _Solved | None]:
         return ExperimentAnswer(None, error=str(error), seconds=time.perf_counter() - started), None
     functionals = [functional(case, name) for name in experiment.quantities]
     values = np.array([quantity_values(system, state, functionals) for state in states])
+    if not np.all(np.isfinite(values)):
+        message = "a quantity is not finite at a converged state"
+        return ExperimentAnswer(None, error=message, seconds=time.perf_counter() - started), None
     answer = ExperimentAnswer(
         values,
         iterations=sum(state.iterations for state in states),
@@ -164,6 +167,8 @@ def solve_experiment(task: ExperimentTask) -> ExperimentAnswer:
         started = time.perf_counter()
         try:
             answer.gradients = _adjoint(task, solved)
+            if not np.all(np.isfinite(answer.gradients)):
+                raise ValueError("a gradient is not finite")
         except (ConvergenceError, ValueError) as error:
             answer.values, answer.error = None, f"no gradient: {error}"
         answer.seconds += time.perf_counter() - started
@@ -200,7 +205,12 @@ class LocalEngine:
                     )
                 gradients.append(answer.gradients)
             else:
-                gradients.append(_adjoint(task, kept[1]))
+                gradient = _adjoint(task, kept[1])
+                if not np.all(np.isfinite(gradient)):
+                    raise ConvergenceError(
+                        f"experiment '{task.experiment.name}': a gradient is not finite", []
+                    )
+                gradients.append(gradient)
         return gradients
 
     def values(self, tasks: list[ExperimentTask]) -> list[ExperimentAnswer]:

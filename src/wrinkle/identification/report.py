@@ -1,4 +1,5 @@
-"""The report of a fit: fit.json, fit_curves.csv and the picture fit.png.
+"""The report of a fit: fit.json, fit_curves.csv (``write_report``) and the picture fit.png
+(``write_picture``, with matplotlib).
 
 fit.json: "parameters" (path -> value), "intervals" (path -> [low, high], the 95 %
 confidence interval, or null), "converged"; with "start", "standard_errors", "correlation"
@@ -22,7 +23,7 @@ import numpy as np
 
 from wrinkle.identification.fit import FitResult
 
-__all__ = ["CURVE_COLUMNS", "write_report"]
+__all__ = ["CURVE_COLUMNS", "write_picture", "write_report"]
 
 CURVE_COLUMNS = ("experiment", "quantity", "x", "load_factor", "measured", "start", "fitted")
 
@@ -123,19 +124,22 @@ def _picture(result: FitResult, path: Path) -> None:
 
 
 def write_report(result: FitResult, out: str | os.PathLike) -> list[Path]:
-    """Write fit.json, fit_curves.csv and (with matplotlib) fit.png into ``out``; the paths
-    written."""
+    """Write fit.json and fit_curves.csv into ``out`` (the paths written); the picture is
+    ``write_picture``'s."""
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     summary = folder / "fit.json"
     summary.write_text(json.dumps(_summary(result), indent=2, allow_nan=False) + "\n")
     curves = folder / "fit_curves.csv"
     _write_curves(result, curves)
-    written = [summary, curves]
-    if all(np.all(np.isfinite(c)) for c in result.curves):
-        try:
-            _picture(result, folder / "fit.png")
-            written.append(folder / "fit.png")
-        except ImportError:  # matplotlib missing: the numbers stand
-            pass
-    return written
+    return [summary, curves]
+
+
+def write_picture(result: FitResult, out: str | os.PathLike) -> Path | None:
+    """Draw fit.png into ``out`` (its path; None where a solution curve is not finite, when
+    the fit ended at a point whose solve failed). ImportError without matplotlib."""
+    if not all(np.all(np.isfinite(c)) for c in result.curves):
+        return None
+    path = Path(out) / "fit.png"
+    _picture(result, path)
+    return path

@@ -125,7 +125,7 @@ def set_path(data: dict[str, Any], path: str, value: float) -> None:
     value where the case has an integer, or nothing, is set as an integer.
     ValueError naming the part of the path that is missing."""
     container, key = _container(data, _path_parts(path))
-    present = get_path(data, path)
+    present = container[int(key)] if isinstance(container, list) else container.get(key)
     if isinstance(present, (dict, list)):
         raise ValueError(f"'{path}' is a table or a list, not a number")
     whole = isinstance(present, int) or present is None  # (a bool is an int, and not whole)
