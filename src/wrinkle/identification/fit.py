@@ -107,13 +107,17 @@ class _Solved:
     states: list[State]
 
 
-def _forward(task: ExperimentTask) -> tuple[ExperimentAnswer, _Solved | None]:
+def _forward(
+    task: ExperimentTask, warm: list[State] | None = None
+) -> tuple[ExperimentAnswer, _Solved | None]:
+    """The task's forward solve (warm: the states of the same experiment at other
+    parameter values, to start each load level from, ``solve_to``)."""
     started = time.perf_counter()
     experiment = task.experiment
     try:
         case = case_of(experiment, task.assignment, task.tolerance)
         system = case.model.discretise()
-        states = solve_to(case, system, experiment.load_factors)
+        states = solve_to(case, system, experiment.load_factors, warm)
     except (ConvergenceError, ValueError) as error:
         return ExperimentAnswer(None, error=str(error), seconds=time.perf_counter() - started), None
     functionals = [functional(case, name) for name in experiment.quantities]
@@ -177,18 +181,21 @@ def solve_experiment(task: ExperimentTask) -> ExperimentAnswer:
 
 class LocalEngine:
     """Solves in this process; the states of the last forward solves are kept, so that the
-    Jacobian at the same point takes only the adjoint solves."""
+    Jacobian at the same point takes only the adjoint solves, and the next forward solve of
+    each experiment starts its load levels from them (``solve_to``'s warm states)."""
 
     def __init__(self) -> None:
         self._kept: dict[int, tuple[ExperimentTask, _Solved]] = {}
+        self._warm: dict[int, list[State]] = {}  # by id of the experiment
 
     def forward(self, tasks: list[ExperimentTask]) -> list[ExperimentAnswer]:
         self._kept.clear()
         answers = []
         for index, task in enumerate(tasks):
-            answer, solved = _forward(task)
+            answer, solved = _forward(task, self._warm.get(id(task.experiment)))
             if solved is not None:
                 self._kept[index] = (task, solved)
+                self._warm[id(task.experiment)] = solved.states
             answers.append(answer)
         return answers
 
@@ -214,11 +221,13 @@ class LocalEngine:
         return gradients
 
     def values(self, tasks: list[ExperimentTask]) -> list[ExperimentAnswer]:
-        """Forward solves whose states are not kept (finite differences)."""
-        return [_forward(task)[0] for task in tasks]
+        """Forward solves whose states are not kept (finite differences), each started
+        from the last kept states of its experiment."""
+        return [_forward(task, self._warm.get(id(task.experiment)))[0] for task in tasks]
 
     def close(self) -> None:
         self._kept.clear()
+        self._warm.clear()
 
 
 class DaskEngine:

@@ -24,15 +24,22 @@ p at a fixed state of every element, are exact to about h^2 (h = 1e-5 of the par
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
 
 from wrinkle.case import Case
 from wrinkle.solvers import ConvergenceError
+from wrinkle.solvers.base import RegularisedSolver, SolverResult, try_evaluate
 from wrinkle.solvers.linear import make_linear_solver
-from wrinkle.solvers.stepping import StepController, SteppedProblem, follow_load_path
+from wrinkle.solvers.stepping import (
+    StepController,
+    SteppedProblem,
+    extrapolate,
+    follow_load_path,
+    solve_step,
+)
 from wrinkle.system import DiscreteSystem
 
 __all__ = [
@@ -114,6 +121,10 @@ class LoadSegment:
         return self.system.at(self.start + load_factor * (self.end - self.start), prescribed)
 
 
+# the tolerance of a warm-started solve, relative to the case's (``solve_to``)
+WARM_TOLERANCE = 1e-2
+
+
 @dataclass
 class State:
     """A converged state: the load factor and the displacements u (n_dofs,)."""
@@ -128,15 +139,63 @@ class _Counter:
     iterations: int = 0
 
 
+def _warm_guesses(
+    warm: Sequence[State], states: list[State], u: np.ndarray, factor: float
+) -> list[np.ndarray]:
+    """The starts of level len(states) at load factor ``factor`` from the warm states: the
+    warm state moved as the level before moved from its own (u, the level before, (n_dofs,))
+    and the extrapolation of the two levels before."""
+    index = len(states)
+    if index == 0:
+        return [warm[0].u]
+    guesses = [warm[index].u + (u - warm[index - 1].u)]
+    before = (0.0, np.zeros_like(u)) if index == 1 else (states[-2].load_factor, states[-2].u)
+    guesses.append(extrapolate(before, states[-1].load_factor, u, factor))
+    return guesses
+
+
+def _from_warm(
+    segment: LoadSegment, u: np.ndarray, guesses: list[np.ndarray], solver: RegularisedSolver
+) -> tuple[SolverResult | None, int]:
+    """The end of a segment solved in one step from the state before it, u, or from the
+    guess (n_dofs,) closest to balance where that is closer than u (``solve_step``), and the
+    Newton iterations taken; no result if it fails."""
+    problem = segment.at(1.0)
+    constrained = ~problem.free
+    residuals = []
+    for guess in guesses:
+        at_guess = try_evaluate(
+            problem, np.where(constrained, problem.prescribed, guess), stiffness=False
+        )
+        residuals.append(np.inf if at_guess is None else at_guess.residual_norm)
+    try:
+        solved = solve_step(problem, u, solver, predicted=guesses[int(np.argmin(residuals))])
+    except ConvergenceError as error:
+        return None, len(error.history)
+    return solved, solved.iterations
+
+
 def solve_to(
-    case: Case, system: DiscreteSystem, load_factors: Sequence[float] | np.ndarray
+    case: Case,
+    system: DiscreteSystem,
+    load_factors: Sequence[float] | np.ndarray,
+    warm: Sequence[State] | None = None,
 ) -> list[State]:
     """The converged states at the increasing ``load_factors`` (each > 0), by load control
     with the case's solver settings: each segment from the state before (the first from the
-    reference state) with the step controller's cut-backs inside it. Raises ConvergenceError
+    reference state) with the step controller's cut-backs inside it. warm: states at the
+    same load factors of a nearby problem (the same case at other parameter values): each
+    segment is first tried in one step from its warm start (``_warm_guesses``; ``solve_step``
+    starts from it where it is closer to balance), converged to WARM_TOLERANCE times the
+    case's tolerance, then, if that fails, by load control. Not for a membrane that encloses
+    a volume (whose states are checked for stability on the way). Raises ConvergenceError
     where a segment cannot be solved."""
     settings = case.settings
     solver = settings.solver()
+    # a warm start converges to a tighter tolerance: the state then differs from a solve
+    # from the reference state by round-off, not by the solver's tolerance, and the fit's
+    # residuals do not depend on the path of the solves
+    tight = replace(settings, tolerance=settings.tolerance * WARM_TOLERANCE).solver()
     controller = StepController(
         first_step=1.0,
         min_step=settings.min_step,
@@ -148,22 +207,36 @@ def solve_to(
     )
     states: list[State] = []
     u = np.zeros(system.n_dofs)
+    usable = (
+        warm is not None
+        and len(warm) == len(load_factors)
+        and all(state.u.shape == u.shape for state in warm)
+        and not system.encloses_volume  # (its states are checked for stability)
+    )
     reached = 0.0
     try:
         for factor in load_factors:
             counter = _Counter()
+            segment = LoadSegment(system, reached, float(factor))
+            warmed = None
+            if usable and warm is not None:
+                guesses = _warm_guesses(warm, states, u, float(factor))
+                warmed, counter.iterations = _from_warm(segment, u, guesses, tight)
+            if warmed is not None:
+                u = warmed.u
+            else:
 
-            def count(_t: float, _u: np.ndarray, solved, counter: _Counter = counter) -> None:
-                counter.iterations += solved.iterations
+                def count(_t: float, _u: np.ndarray, solved, counter: _Counter = counter) -> None:
+                    counter.iterations += solved.iterations
 
-            u = follow_load_path(
-                LoadSegment(system, reached, float(factor)),
-                solver,
-                controller,
-                u0=u,
-                on_step=count,
-                stability=system.encloses_volume,
-            )
+                u = follow_load_path(
+                    segment,
+                    solver,
+                    controller,
+                    u0=u,
+                    on_step=count,
+                    stability=system.encloses_volume,
+                )
             states.append(State(float(factor), u.copy(), counter.iterations))
             reached = float(factor)
     except ConvergenceError as error:
@@ -173,6 +246,7 @@ def solve_to(
         ) from None
     finally:
         solver.release()
+        tight.release()
     return states
 
 
