@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -221,6 +222,36 @@ def test_a_study_on_a_dask_cluster_the_test_starts(tmp_path):
         remote = run_study(study, tmp_path / "remote", scheduler=cluster.scheduler_address)
     assert [row["top_Fx"] for row in remote] == [row["top_Fx"] for row in here]
     assert [row["status"] for row in remote] == ["converged", "converged"]
+
+
+def _worker_settings() -> tuple[str | None, bool, str | None]:
+    import dask
+
+    return (
+        os.environ.get("MALLOC_TRIM_THRESHOLD_"),
+        dask.config.get("distributed.worker.profile.enabled"),
+        os.environ.get("OPENBLAS_NUM_THREADS"),
+    )
+
+
+def test_the_local_cluster_s_workers_keep_glibc_s_memory_threshold(monkeypatch):
+    """wrinkle's own local cluster starts its workers without Dask's
+    MALLOC_TRIM_THRESHOLD_ = 65536 (35 % slower airbag variants, docs/studies.md) and
+    without the stack profiler, single-threaded, even where a Dask cluster started before
+    left the variable in this process's environment; the environment is restored."""
+    pytest.importorskip("distributed")
+    from wrinkle.studies.run import dask_client
+
+    monkeypatch.setenv("MALLOC_TRIM_THRESHOLD_", "65536")
+    client = dask_client(None, 1, required=True)
+    try:
+        settings = list(client.run(_worker_settings).values())
+    finally:
+        cluster = client.cluster
+        client.close()
+        cluster.close()
+    assert settings == [(None, False, "1")]
+    assert os.environ["MALLOC_TRIM_THRESHOLD_"] == "65536"
 
 
 def test_a_study_in_local_processes_without_dask(tmp_path):

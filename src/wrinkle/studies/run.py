@@ -49,6 +49,16 @@ THREAD_VARIABLES = (
     "NUMBA_NUM_THREADS",
 )
 VARIANT_FILE = "variant.json"
+# The local cluster's workers, unlike Dask's defaults: glibc's own (dynamic) threshold for
+# giving freed memory back to the system instead of Dask's MALLOC_TRIM_THRESHOLD_ = 65536,
+# which made each airbag variant 35 % slower (its large NumPy arrays mapped and unmapped
+# again at every allocation), and no statistical profiler (it feeds the dashboard, which is
+# off; sampling the solver's stack every 10 ms cost 15 %). docs/studies.md, Cost.
+MALLOC_TRIM = "MALLOC_TRIM_THRESHOLD_"
+LOCAL_CLUSTER_CONFIG = {
+    f"distributed.nanny.pre-spawn-environ.{MALLOC_TRIM}": None,
+    "distributed.worker.profile.enabled": False,
+}
 
 
 @dataclass(frozen=True)
@@ -171,10 +181,13 @@ def _done(task: VariantTask) -> dict[str, Any] | None:
 
 
 @contextlib.contextmanager
-def _single_threaded_children() -> Iterator[None]:
-    """The thread variables set to 1 while worker processes start (they inherit them)."""
-    saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+def _worker_environment() -> Iterator[None]:
+    """While worker processes start (they inherit it): the thread variables set to 1, and
+    no MALLOC_TRIM_THRESHOLD_ (``LOCAL_CLUSTER_CONFIG``; a Dask cluster started before in
+    this process leaves its value in os.environ)."""
+    saved = {name: os.environ.get(name) for name in (*THREAD_VARIABLES, MALLOC_TRIM)}
     os.environ.update(dict.fromkeys(THREAD_VARIABLES, "1"))
+    os.environ.pop(MALLOC_TRIM, None)
     try:
         yield
     finally:
@@ -206,13 +219,16 @@ def dask_client(scheduler: str | None, workers: int, required: bool):
             ) from None
     for name in ("distributed", "tornado"):  # the cluster's chatter stays off the terminal
         logging.getLogger(name).setLevel(logging.ERROR)
-    cluster = LocalCluster(
-        n_workers=workers,
-        threads_per_worker=1,
-        processes=True,
-        dashboard_address=None,
-        silence_logs=logging.ERROR,
-    )
+    import dask
+
+    with _worker_environment(), dask.config.set(LOCAL_CLUSTER_CONFIG):
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
     return Client(cluster)
 
 
@@ -270,8 +286,7 @@ def run_study(
     elif pending:
         client = None
         if engine == "dask":
-            with _single_threaded_children():
-                client = dask_client(scheduler, workers, required=scheduler is not None)
+            client = dask_client(scheduler, workers, required=scheduler is not None)
         if client is not None:
             from distributed import as_completed
 
@@ -287,7 +302,7 @@ def run_study(
         else:  # the workers start as tasks are submitted: the variables set meanwhile
             context = multiprocessing.get_context("spawn")
             with (
-                _single_threaded_children(),
+                _worker_environment(),
                 concurrent.futures.ProcessPoolExecutor(workers, mp_context=context) as pool,
             ):
                 for future in concurrent.futures.as_completed(
