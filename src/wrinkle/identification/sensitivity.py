@@ -192,10 +192,6 @@ def solve_to(
     where a segment cannot be solved."""
     settings = case.settings
     solver = settings.solver()
-    # a warm start converges to a tighter tolerance: the state then differs from a solve
-    # from the reference state by round-off, not by the solver's tolerance, and the fit's
-    # residuals do not depend on the path of the solves
-    tight = replace(settings, tolerance=settings.tolerance * WARM_TOLERANCE).solver()
     controller = StepController(
         first_step=1.0,
         min_step=settings.min_step,
@@ -213,13 +209,19 @@ def solve_to(
         and all(state.u.shape == u.shape for state in warm)
         and not system.encloses_volume  # (its states are checked for stability)
     )
+    # a warm start converges to a tighter tolerance: the state then differs from a solve
+    # from the reference state by round-off, not by the solver's tolerance, and the fit's
+    # residuals do not depend on the path of the solves
+    tight = None
+    if usable:
+        tight = replace(settings, tolerance=settings.tolerance * WARM_TOLERANCE).solver()
     reached = 0.0
     try:
         for factor in load_factors:
             counter = _Counter()
             segment = LoadSegment(system, reached, float(factor))
             warmed = None
-            if usable and warm is not None:
+            if tight is not None and warm is not None:
                 guesses = _warm_guesses(warm, states, u, float(factor))
                 warmed, counter.iterations = _from_warm(segment, u, guesses, tight)
             if warmed is not None:
@@ -246,7 +248,8 @@ def solve_to(
         ) from None
     finally:
         solver.release()
-        tight.release()
+        if tight is not None:
+            tight.release()
     return states
 
 
