@@ -1,7 +1,7 @@
 """Compiled kernels (``wrinkle.compiled``, Numba) against the NumPy formulas they replace: the
 element stiffness against ``element.element_stiffness`` with ``strain_displacement``, the
 scatter against ``np.bincount``, the pressure stiffness against
-``loads.subtract_pressure_stiffness``, the nodal forces against ``element._nodal_forces``, the
+``loads.subtract_pressure_stiffness``, the nodal forces against ``element.nodal_forces``, the
 pressure forces against ``loads.pressure_forces`` summed by ``np.bincount``, the wrinkled
 tangent against ``Wrinkling._wrinkled_tangent`` (these four bit for bit), a whole evaluation
 of the airbag (forces, stiffness, energy) with and without them, and the rule that chooses
@@ -16,7 +16,7 @@ import pytest
 
 from wrinkle import compiled
 from wrinkle.case import read_case
-from wrinkle.element import _nodal_forces, element_stiffness, strain_displacement
+from wrinkle.element import element_stiffness, nodal_forces, strain_displacement
 from wrinkle.loads import pressure_forces, subtract_pressure_stiffness
 from wrinkle.materials import StVenantKirchhoff
 from wrinkle.wrinkling import Wrinkling
@@ -116,7 +116,7 @@ def test_pressure_stiffness_equals_numpy_loop():
 @needs_numba
 def test_nodal_forces_equal_numpy_loop():
     area, F, grad, _, stress = random_element_data(257, seed=3)
-    expected = _nodal_forces(area, F, grad, stress, np.empty((257, 9)))
+    expected = nodal_forces(area, F, grad, stress, np.empty((257, 9)))
     out = np.full((257, 9), np.nan)
     compiled.nodal_forces(area, F, grad, stress, out)
     np.testing.assert_array_equal(out, expected)

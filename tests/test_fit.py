@@ -24,8 +24,11 @@ from verification.references.sphere import InflatedSphere
 from wrinkle.case import read_case, read_case_data
 from wrinkle.cli import main
 from wrinkle.identification import FitError, read_fit, run_fit
+from wrinkle.identification.explicit import ElementStates
+from wrinkle.identification.explicit import force_derivatives as explicit_force_derivatives
 from wrinkle.identification.fit import DaskEngine
 from wrinkle.identification.sensitivity import (
+    _balance_forces,
     adjoint_gradients,
     force_derivatives,
     functional,
@@ -134,7 +137,9 @@ def test_adjoint_gradients_equal_finite_differences_of_re_solves(tmp_path, kind)
         (made({p: v * (1 + 1e-5)})[1], made({p: v * (1 - 1e-5)})[1], 1e-5 * v)
         for p, v in PARAMETERS.items()
     ]
-    adjoint = adjoint_gradients(system, state, functionals, force_derivatives(state, perturbed))
+    adjoint = adjoint_gradients(
+        system, state, functionals, force_derivatives(system, state, perturbed)
+    )
     differences = np.empty_like(adjoint)
     for j, (p, v) in enumerate(PARAMETERS.items()):  # central differences of whole re-solves
         h = 1e-4 * v
@@ -164,7 +169,8 @@ def test_a_warm_started_solve_reaches_the_cold_solve_s_states(tmp_path, kind):
     """The fit's forward solves start each load level from the states of the last point
     (``solve_to``'s warm states): at parameters 1 % away (E_L and the fibre angle) they
     reach the same quantities as a solve from the flat sheet, to the solver's tolerance, in
-    fewer iterations (35 against 70 on the wrinkled sheet)."""
+    fewer iterations (35 against 70 on the wrinkled sheet); the states keep the reactions
+    of their solves' last evaluations, which equal a new evaluation's."""
     supports, names = STATES[kind]
     path = tmp_path / "sheet.toml"
     path.write_text(SHEET.format(supports=supports))
@@ -182,6 +188,98 @@ def test_a_warm_started_solve_reaches_the_cold_solve_s_states(tmp_path, kind):
         got = quantity_values(system, b, functionals)
         assert np.allclose(got, expected, rtol=1e-8, atol=1e-9 * np.abs(expected).max())
     assert sum(s.iterations for s in warmed) < sum(s.iterations for s in cold)
+    held = system.constrained
+    for s in cold + warmed:  # the reactions kept from the solves' last evaluations
+        assert s.reactions is not None
+        fresh = _balance_forces(system, s)[held]
+        assert np.allclose(s.reactions[held], fresh, rtol=0.0, atol=1e-13 * np.abs(fresh).max())
+
+
+def _sheet_and_perturbed(tmp_path, kind, parameters):
+    """The sheet in state ``kind`` solved to load factor 1, and for each parameter the
+    systems at p (1 +- 1e-5) and the step."""
+    path = tmp_path / "sheet.toml"
+    path.write_text(SHEET.format(supports=STATES[kind][0]))
+    base = read_case_data(path)
+
+    def made(assignment):
+        return read_case(path, variant_overrides(base, assignment)).model.discretise()
+
+    case = read_case(path)
+    system = case.model.discretise()
+    state = solve_to(case, system, [0.5, 1.0])[-1]
+    perturbed = [
+        (made({p: v * (1 + 1e-5)}), made({p: v * (1 - 1e-5)}), 1e-5 * v)
+        for p, v in parameters.items()
+    ]
+    return system, state, perturbed
+
+
+@pytest.mark.parametrize("kind", ["taut", "wrinkled"])
+def test_explicit_force_derivatives_equal_central_differences_of_the_forces(tmp_path, kind):
+    """dR/dp from the element states (no wrinkling solve: the law's derivative projected on
+    the wrinkling conditions, and the turn of the material frames for the fibre angle)
+    equals the central difference of the whole R at the same displacements, for every
+    parameter of the law, the thickness and the angle."""
+    parameters = {**PARAMETERS, "material.thickness": 0.5}
+    system, state, perturbed = _sheet_and_perturbed(tmp_path, kind, parameters)
+    explicit = explicit_force_derivatives(system, state.u, state.load_factor, perturbed)
+    differences = [
+        (_balance_forces(plus, state) - _balance_forces(minus, state)) / (2.0 * h)
+        for plus, minus, h in perturbed
+    ]
+    # the size of R's sensitivity: its change for a 100 % change of a parameter
+    size = max(np.abs(d).max() * v for d, v in zip(differences, parameters.values(), strict=True))
+    for (name, value), column, difference in zip(
+        parameters.items(), explicit, differences, strict=True
+    ):
+        assert column is not None, name
+        assert np.abs(column - difference).max() * value <= 1e-8 * size, name
+
+
+def test_explicit_stress_derivatives_in_a_slack_sheet(tmp_path):
+    """In the sheet with a slack corner, the element stresses' derivatives from the element
+    states equal central differences of the relaxed law wherever the state is the same at
+    p +- h; the only elements where it is not sit on the boundary between taut and
+    wrinkled (minor principal stress zero to round-off), where the derivative is the one
+    of the state the element is in, not the mean of the two that the difference gives."""
+    system, state, perturbed = _sheet_and_perturbed(tmp_path, "slack", PARAMETERS)
+    states = ElementStates(system, state.u)
+    (_, group), (_, C, response) = system.groups[0], states.groups[0]
+    wrinkling = group.material
+    counts = np.bincount(response.state, minlength=3)
+    assert counts[1] > 0 and counts[2] > 0  # wrinkled and slack elements
+    compared = []
+    for name, (plus, minus, h) in zip(PARAMETERS, perturbed, strict=True):
+        if name == "material.angle":
+            continue  # (the frames turn: the law is the same)
+        up, down = plus.groups[0][1].material, minus.groups[0][1].material
+        explicit = wrinkling.parameter_derivative(C, response, up.material, down.material, h)
+        at_plus, at_minus = up.response(C, tangent=False), down.response(C, tangent=False)
+        difference = (at_plus.stress - at_minus.stress) / (2.0 * h)
+        same = (at_plus.state == response.state) & (at_minus.state == response.state)
+        compared.append((name, explicit, difference, same))
+    # the size of the stresses' sensitivity: their change for a 100 % change of a parameter
+    scale = max(np.abs(d).max() * PARAMETERS[name] for name, _, d, _ in compared)
+    for name, explicit, difference, same in compared:
+        error = np.abs(explicit - difference).reshape(-1, 4).max(axis=1) * PARAMETERS[name]
+        assert np.all(error[same] <= 1e-8 * scale), name
+        stress = response.stress[~same]
+        minor = np.linalg.eigvalsh(stress)[:, 0]
+        assert np.all(np.abs(minor) <= 1e-12 * np.abs(stress).reshape(-1, 4).max(axis=1)), name
+
+
+def test_a_parameter_that_changes_the_mesh_takes_the_difference_of_the_forces(tmp_path):
+    """The sheet's width changes the elements' areas: no explicit derivative; the
+    difference of the whole R is taken instead."""
+    system, state, perturbed = _sheet_and_perturbed(
+        tmp_path, "wrinkled", {"mesh.rectangle.width": 40.0, "material.E_L": 50.0}
+    )
+    explicit = explicit_force_derivatives(system, state.u, state.load_factor, perturbed)
+    assert explicit[0] is None and explicit[1] is not None
+    plus, minus, h = perturbed[0]
+    difference = (_balance_forces(plus, state) - _balance_forces(minus, state)) / (2.0 * h)
+    assert np.array_equal(force_derivatives(system, state, perturbed)[:, 0], difference)
 
 
 def test_a_probe_on_a_free_wrinkled_edge_has_no_gradient(tmp_path):
@@ -198,7 +296,10 @@ def test_a_probe_on_a_free_wrinkled_edge_has_no_gradient(tmp_path):
     perturbed = [(other.model.discretise(), system, 0.01)]
     with pytest.raises(ConvergenceError, match="does not resist"):
         adjoint_gradients(
-            system, state, [functional(case, "quarter_ux")], force_derivatives(state, perturbed)
+            system,
+            state,
+            [functional(case, "quarter_ux")],
+            force_derivatives(system, state, perturbed),
         )
 
 

@@ -9,7 +9,7 @@ installed (extra ``fast``); NumPy versions of the same formulas are the fallback
   element) in one pass over them instead of 54 strided ones: 0.9 -> 0.13 ms per block of
   8,192 elements.
 - ``nodal_forces``: the internal nodal forces A0 F N grad psi_k of
-  ``wrinkle.element._nodal_forces``, one element at a time instead of some 50 NumPy passes
+  ``wrinkle.element.nodal_forces``, one element at a time instead of some 50 NumPy passes
   over a block: 4.7 -> 0.6 ms for 10^5 elements.
 - ``add_pressure_forces``: the follower pressure's nodal forces p c / 6
   (``wrinkle.loads.pressure_forces``) summed into the global vector in the order of
@@ -123,7 +123,7 @@ def _subtract_pressure_stiffness(K, x, pressure):
 
 def _nodal_forces(area, F, shape_gradient, stress, out):
     """out[e, 3 k + i] = (A0 F N grad psi_k)_i for each element e; shapes as
-    ``wrinkle.element._nodal_forces``."""
+    ``wrinkle.element.nodal_forces``."""
     for e in range(area.shape[0]):
         a = area[e]
         N00, N11, N01 = a * stress[e, 0, 0], a * stress[e, 1, 1], a * stress[e, 0, 1]
@@ -254,7 +254,7 @@ def nodal_forces(
 ) -> np.ndarray:
     """Internal nodal forces A0 F N grad psi_k written into out, (m, 9); area (m,),
     F (m, 3, 2), shape_gradient (m, 3, 2), stress N (m, 2, 2) resultant; the formula of
-    ``wrinkle.element._nodal_forces``."""
+    ``wrinkle.element.nodal_forces``."""
     _compiled("nodal_forces")(
         np.ascontiguousarray(area),
         np.ascontiguousarray(F),

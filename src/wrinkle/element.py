@@ -28,6 +28,7 @@ __all__ = [
     "MembraneElements",
     "add_geometric_stiffness",
     "element_stiffness",
+    "nodal_forces",
     "strain_displacement",
     "unit_tension_stiffness",
 ]
@@ -73,7 +74,7 @@ def strain_displacement(F: np.ndarray, shape_gradient: np.ndarray) -> np.ndarray
     return B.reshape(n, 3, 9)
 
 
-def _nodal_forces(
+def nodal_forces(
     area: np.ndarray, F: np.ndarray, shape_gradient: np.ndarray, stress: np.ndarray, out: np.ndarray
 ) -> np.ndarray:
     """Internal nodal forces A0 B^T s without forming B: f_k = A0 F N grad psi_k written into
@@ -238,7 +239,7 @@ class MembraneElements:
             if self.compiled:
                 kernels.nodal_forces(area, F_sub, grad, stress, forces[sub])
             else:
-                _nodal_forces(area, F_sub, grad, stress, forces[sub])
+                nodal_forces(area, F_sub, grad, stress, forces[sub])
             if stiffness:
                 out = K[: sub.stop - sub.start] if sink else K[sub]
                 if self.compiled:

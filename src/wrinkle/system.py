@@ -941,6 +941,7 @@ class StepProblem:
         stiffness: bool = True,
         lift: np.ndarray | None = None,
         keep_constrained: bool = False,
+        keep_elements: bool = False,
     ) -> Evaluation:
         """Residual, energy, element states and (``stiffness``) the tangent at u, (n_dofs,).
 
@@ -949,7 +950,8 @@ class StepProblem:
         f - f*(u) - K lift on the free rows, from the tangent K at u before its constrained
         rows and columns are replaced (needs ``stiffness``). keep_constrained: return the
         whole tangent d(f* - f)/du, its constrained rows and columns kept (the sensitivities
-        of the reactions, ``wrinkle.identification.sensitivity``).
+        of the reactions, ``wrinkle.identification.sensitivity``). keep_elements: the
+        evaluation holds the ``ElementResult`` (its ``elements``).
         """
         system, timer = self.system, self.timer
         pattern = system.pattern
@@ -1031,4 +1033,5 @@ class StepProblem:
             self.metric,
             reactions,
             lambda: system.inadmissible(system.element_coordinates(u)),
+            result if keep_elements else None,
         )

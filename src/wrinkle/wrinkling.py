@@ -587,23 +587,11 @@ class Wrinkling:
         With M = [b m', m] (3 x 2) and J = W D M + [V s, 0]:
         dN/dE = D - (D M) J^-1 (W D), symmetrised.
         """
-        cc, ss, cs = c * c, s * s, c * s
-        m0, m1 = 0.5 * cc, 0.5 * ss
-        bcs = b * cs
-        bdm2 = b * (cc - ss)
-        s0, s1, s2 = stress[:, 0, 0], stress[:, 1, 1], stress[:, 0, 1]
         Dij = [[D[:, i, j] for j in range(3)] for i in range(3)]
-        # D M: column 0 = D (b m'), column 1 = D m, rows i = 0, 1, 2
-        DM0 = [bcs * (Dij[i][1] - Dij[i][0]) + Dij[i][2] * bdm2 for i in range(3)]
-        DM1 = [Dij[i][0] * m0 + Dij[i][1] * m1 + Dij[i][2] * cs for i in range(3)]
+        DM0, DM1, (J00, J01, J10, J11), inverse_det = _condition_jacobian(c, s, b, stress, Dij)
         # rows of W D
         WD0 = [c * Dij[0][j] + s * Dij[2][j] for j in range(3)]
         WD1 = [s * Dij[1][j] + c * Dij[2][j] for j in range(3)]
-        J00 = c * DM0[0] + s * DM0[2] + (c * s2 - s * s0)
-        J01 = c * DM1[0] + s * DM1[2]
-        J10 = s * DM0[1] + c * DM0[2] + (c * s1 - s * s2)
-        J11 = s * DM1[1] + c * DM1[2]
-        inverse_det = 1.0 / (J00 * J11 - J01 * J10)
         # P = J^-1 W D, rows 0 and 1
         P0 = [(J11 * WD0[j] - J01 * WD1[j]) * inverse_det for j in range(3)]
         P1 = [(J00 * WD1[j] - J10 * WD0[j]) * inverse_det for j in range(3)]
@@ -618,6 +606,84 @@ class Wrinkling:
                 if j != i:
                     tangent[:, j, i] = value
         return tangent
+
+    # -- parameters of the law ---------------------------------------------------------------
+    def parameter_derivative(
+        self,
+        C: np.ndarray,
+        response: WrinklingResponse,
+        plus: Material,
+        minus: Material,
+        step: float,
+    ) -> np.ndarray:
+        """dN/dp of the relaxed stress at fixed C (n, 2, 2), material frame, (n, 2, 2), for a
+        parameter p of the plain law; plus and minus: the law at p + step and p - step;
+        response: this wrapper's ``response`` at C (its states, wrinkle angles and parameters).
+
+        With ds = (s(C; p + step) - s(C; p - step)) / (2 step) the law's own derivative
+        (Voigt, exact to step^2): taut, ds at C; slack, zero; wrinkled, by the implicit
+        function theorem on the conditions g = W s(e + b m; p) = 0 at the element's own phi
+        and b, ds at C' = C + b w (x) w projected as the tangent is (module docstring):
+
+            dN/dp = ds - D' M J^-1 W ds.
+
+        No wrinkling condition is solved again (``response`` holds their solution).
+        """
+        out = np.zeros_like(C)
+        taut = np.flatnonzero(response.state == TAUT)
+        if taut.size:
+            Ct = C[taut]
+            out[taut] = (
+                plus.response(Ct, tangent=False).stress - minus.response(Ct, tangent=False).stress
+            ) / (2.0 * step)
+        wrinkled = np.flatnonzero(response.state == WRINKLED)
+        if wrinkled.size:
+            phi, b = response.wrinkle_angle[wrinkled], response.wrinkle_parameter[wrinkled]
+            c, s = np.cos(phi), np.sin(phi)
+            Cw = _modified_tensor(C[wrinkled], c, s, b)
+            modified = self.material.response(Cw, tangent=True)
+            D = tangent_of(modified)
+            Dij = [[D[:, i, j] for j in range(3)] for i in range(3)]
+            DM0, DM1, (J00, J01, J10, J11), inverse_det = _condition_jacobian(
+                c, s, b, modified.stress, Dij
+            )
+            dS = (
+                plus.response(Cw, tangent=False).stress - minus.response(Cw, tangent=False).stress
+            ) / (2.0 * step)
+            ds = (dS[:, 0, 0], dS[:, 1, 1], dS[:, 0, 1])
+            v0, v1 = c * ds[0] + s * ds[2], s * ds[1] + c * ds[2]  # W ds
+            y0 = (J11 * v0 - J01 * v1) * inverse_det  # J^-1 W ds
+            y1 = (J00 * v1 - J10 * v0) * inverse_det
+            projected = [ds[i] - (DM0[i] * y0 + DM1[i] * y1) for i in range(3)]
+            out[wrinkled, 0, 0] = projected[0]
+            out[wrinkled, 1, 1] = projected[1]
+            out[wrinkled, 0, 1] = out[wrinkled, 1, 0] = projected[2]
+        return out
+
+
+def _condition_jacobian(
+    c: np.ndarray, s: np.ndarray, b: np.ndarray, stress: np.ndarray, Dij: list[list[np.ndarray]]
+) -> tuple[
+    list[np.ndarray],
+    list[np.ndarray],
+    tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    np.ndarray,
+]:
+    """The columns D M = [D b m', D m] (each three (m,) rows), J = W D M + [V s, 0] as
+    (J00, J01, J10, J11) and 1 / det J of the wrinkling conditions (module docstring); w =
+    (c, s), b (m,), stress (m, 2, 2) and Dij the entries of D (m, 3, 3) of the law at C'."""
+    cc, ss, cs = c * c, s * s, c * s
+    m0, m1 = 0.5 * cc, 0.5 * ss
+    bcs = b * cs
+    bdm2 = b * (cc - ss)
+    s0, s1, s2 = stress[:, 0, 0], stress[:, 1, 1], stress[:, 0, 1]
+    DM0 = [bcs * (Dij[i][1] - Dij[i][0]) + Dij[i][2] * bdm2 for i in range(3)]
+    DM1 = [Dij[i][0] * m0 + Dij[i][1] * m1 + Dij[i][2] * cs for i in range(3)]
+    J00 = c * DM0[0] + s * DM0[2] + (c * s2 - s * s0)
+    J01 = c * DM1[0] + s * DM1[2]
+    J10 = s * DM0[1] + c * DM0[2] + (c * s1 - s * s2)
+    J11 = s * DM1[1] + c * DM1[2]
+    return DM0, DM1, (J00, J01, J10, J11), 1.0 / (J00 * J11 - J01 * J10)
 
 
 def _voigt_strain(C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -44,6 +44,7 @@ from wrinkle.identification.sensitivity import (
     functional,
     quantity_values,
     solve_to,
+    tangent_at,
 )
 from wrinkle.solvers import ConvergenceError
 from wrinkle.system import DiscreteSystem
@@ -149,18 +150,14 @@ def _adjoint(task: ExperimentTask, solved: _Solved) -> np.ndarray:
         perturbed.append((pair[0], pair[1], h))
     functionals = [functional(solved.case, name) for name in experiment.quantities]
     linear_solver = solved.case.settings.linear_solver
-    return np.array(
-        [
-            adjoint_gradients(
-                solved.system,
-                state,
-                functionals,
-                force_derivatives(state, perturbed),
-                linear_solver,
-            )
-            for state in solved.states
-        ]
-    )
+    gradients = []
+    for state in solved.states:
+        evaluation = tangent_at(solved.system, state)  # shared by dR/dp and the adjoint
+        dR = force_derivatives(solved.system, state, perturbed, evaluation)
+        gradients.append(
+            adjoint_gradients(solved.system, state, functionals, dR, linear_solver, evaluation)
+        )
+    return np.array(gradients)
 
 
 def solve_experiment(task: ExperimentTask) -> ExperimentAnswer:

@@ -30,15 +30,15 @@ import numpy as np
 import scipy.sparse as sp
 
 from wrinkle.case import Case
+from wrinkle.identification.explicit import force_derivatives as force_derivatives_at
 from wrinkle.solvers import ConvergenceError
-from wrinkle.solvers.base import RegularisedSolver, SolverResult, try_evaluate
+from wrinkle.solvers.base import Evaluation, RegularisedSolver, SolverResult, try_evaluate
 from wrinkle.solvers.linear import make_linear_solver
 from wrinkle.solvers.stepping import (
     StepController,
     SteppedProblem,
     extrapolate,
     follow_load_path,
-    solve_step,
 )
 from wrinkle.system import DiscreteSystem
 
@@ -52,6 +52,7 @@ __all__ = [
     "quantity_names",
     "quantity_values",
     "solve_to",
+    "tangent_at",
 ]
 
 COMPONENTS = "xyz"
@@ -127,16 +128,20 @@ WARM_TOLERANCE = 1e-2
 
 @dataclass
 class State:
-    """A converged state: the load factor and the displacements u (n_dofs,)."""
+    """A converged state: the load factor and the displacements u (n_dofs,); reactions:
+    the support reactions there, (n_dofs,), zero at the free components, if the solve that
+    reached it gave them (its last evaluation, at u)."""
 
     load_factor: float
     u: np.ndarray
     iterations: int = 0
+    reactions: np.ndarray | None = None
 
 
 @dataclass
 class _Counter:
     iterations: int = 0
+    last: SolverResult | None = None  # the last converged step
 
 
 def _warm_guesses(
@@ -155,21 +160,24 @@ def _warm_guesses(
 
 
 def _from_warm(
-    segment: LoadSegment, u: np.ndarray, guesses: list[np.ndarray], solver: RegularisedSolver
+    segment: LoadSegment, guesses: list[np.ndarray], solver: RegularisedSolver
 ) -> tuple[SolverResult | None, int]:
-    """The end of a segment solved in one step from the state before it, u, or from the
-    guess (n_dofs,) closest to balance where that is closer than u (``solve_step``), and the
-    Newton iterations taken; no result if it fails."""
+    """The end of a segment solved in one step from the guess (n_dofs,) closest to balance,
+    and the Newton iterations taken; no result if it fails."""
     problem = segment.at(1.0)
     constrained = ~problem.free
-    residuals = []
+    best = None
     for guess in guesses:
-        at_guess = try_evaluate(
-            problem, np.where(constrained, problem.prescribed, guess), stiffness=False
-        )
-        residuals.append(np.inf if at_guess is None else at_guess.residual_norm)
+        start = np.where(constrained, problem.prescribed, guess)
+        at_guess = try_evaluate(problem, start, stiffness=False)
+        if at_guess is not None and (
+            best is None or at_guess.residual_norm < best[1].residual_norm
+        ):
+            best = (start, at_guess)
+    if best is None:
+        return None, 0
     try:
-        solved = solve_step(problem, u, solver, predicted=guesses[int(np.argmin(residuals))])
+        solved = solver.solve(problem, *best)
     except ConvergenceError as error:
         return None, len(error.history)
     return solved, solved.iterations
@@ -185,8 +193,8 @@ def solve_to(
     with the case's solver settings: each segment from the state before (the first from the
     reference state) with the step controller's cut-backs inside it. warm: states at the
     same load factors of a nearby problem (the same case at other parameter values): each
-    segment is first tried in one step from its warm start (``_warm_guesses``; ``solve_step``
-    starts from it where it is closer to balance), converged to WARM_TOLERANCE times the
+    segment is first tried in one step from the warm start closest to balance
+    (``_warm_guesses``), converged to WARM_TOLERANCE times the
     case's tolerance, then, if that fails, by load control. Not for a membrane that encloses
     a volume (whose states are checked for stability on the way). Raises ConvergenceError
     where a segment cannot be solved."""
@@ -223,13 +231,15 @@ def solve_to(
             warmed = None
             if tight is not None and warm is not None:
                 guesses = _warm_guesses(warm, states, u, float(factor))
-                warmed, counter.iterations = _from_warm(segment, u, guesses, tight)
+                warmed, counter.iterations = _from_warm(segment, guesses, tight)
             if warmed is not None:
                 u = warmed.u
+                counter.last = warmed
             else:
 
                 def count(_t: float, _u: np.ndarray, solved, counter: _Counter = counter) -> None:
                     counter.iterations += solved.iterations
+                    counter.last = solved
 
                 u = follow_load_path(
                     segment,
@@ -239,7 +249,11 @@ def solve_to(
                     on_step=count,
                     stability=system.encloses_volume,
                 )
-            states.append(State(float(factor), u.copy(), counter.iterations))
+            last = counter.last
+            reactions = None
+            if last is not None and np.array_equal(last.u, u):
+                reactions = last.evaluation.reactions
+            states.append(State(float(factor), u.copy(), counter.iterations, reactions))
             reached = float(factor)
     except ConvergenceError as error:
         raise ConvergenceError(
@@ -265,25 +279,43 @@ def _balance_forces(system: DiscreteSystem, state: State) -> np.ndarray:
 def quantity_values(
     system: DiscreteSystem, state: State, functionals: Sequence[Functional]
 ) -> np.ndarray:
-    """The quantities at a converged state, (n_quantities,)."""
-    needs_reactions = any(f.of_reactions for f in functionals)
-    R = _balance_forces(system, state) if needs_reactions else None
+    """The quantities at a converged state, (n_quantities,) (its reactions, if it has
+    them, else from one evaluation)."""
+    R = None
+    if any(f.of_reactions for f in functionals):
+        R = state.reactions if state.reactions is not None else _balance_forces(system, state)
     return np.array(
         [f.weights @ (R if f.of_reactions and R is not None else state.u) for f in functionals]
     )
 
 
 def force_derivatives(
+    system: DiscreteSystem,
     state: State,
     perturbed: Sequence[tuple[DiscreteSystem, DiscreteSystem, float]],
+    evaluation: Evaluation | None = None,
 ) -> np.ndarray:
     """dR/dp at fixed displacements, (n_dofs, n_parameters): for each parameter the systems
-    made with it at p + h and p - h, and h; (R(u, p + h) - R(u, p - h)) / (2 h)."""
+    made with it at p + h and p - h, and h. Where those differ from ``system`` only in their
+    materials, frames and loads, from the element states at the state without a wrinkling
+    solve (``wrinkle.identification.explicit``; evaluation: ``tangent_at`` the state, whose
+    elements it then takes); otherwise (R(u, p + h) - R(u, p - h)) / (2 h)."""
+    elements = None if evaluation is None else evaluation.elements
+    explicit = force_derivatives_at(system, state.u, state.load_factor, perturbed, elements)
     columns = [
         (_balance_forces(plus, state) - _balance_forces(minus, state)) / (2.0 * h)
-        for plus, minus, h in perturbed
+        if column is None
+        else column
+        for column, (plus, minus, h) in zip(explicit, perturbed, strict=True)
     ]
     return np.stack(columns, axis=1) if columns else np.zeros((state.u.size, 0))
+
+
+def tangent_at(system: DiscreteSystem, state: State) -> Evaluation:
+    """The evaluation at a converged state with the whole tangent d(f* - f)/du, its
+    constrained rows and columns kept, and the element results (``adjoint_gradients``,
+    ``force_derivatives``)."""
+    return system.at(state.load_factor).evaluate(state.u, keep_constrained=True, keep_elements=True)
 
 
 def adjoint_gradients(
@@ -292,17 +324,20 @@ def adjoint_gradients(
     functionals: Sequence[Functional],
     dR: np.ndarray,
     linear_solver: str = "auto",
+    evaluation: Evaluation | None = None,
 ) -> np.ndarray:
     """dq/dp of every quantity at a converged state (module docstring), (n_quantities,
     n_parameters), from dR/dp (n_dofs, n_parameters) (``force_derivatives``): the tangent at
-    the state is factorised once (``linear_solver``, ``wrinkle.solvers.linear``) and each
-    quantity takes one solve with its transpose.
+    the state (``tangent_at``, made here unless given as ``evaluation``) is factorised once
+    (``linear_solver``, ``wrinkle.solvers.linear``) and each quantity takes one solve with
+    its transpose.
 
     Free components that no element stiffens (the nodes of a wholly slack region: rows of
     the tangent zero to round-off) move without force and change no reaction; the solve
     leaves them out (their z is zero), where K_ff alone would be singular. ConvergenceError
     if the tangent on the others is singular (a mechanism the supports allow)."""
-    evaluation = system.at(state.load_factor).evaluate(state.u, keep_constrained=True)
+    if evaluation is None:
+        evaluation = tangent_at(system, state)
     K = evaluation.stiffness
     assert K is not None
     K = sp.csr_matrix(K)

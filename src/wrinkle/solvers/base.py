@@ -71,6 +71,8 @@ class Evaluation:
     admissibility: a function giving why the state is not a physical one (collapsed
         elements or enclosed volume), or None if it is one; called only for a balanced state
         (``inadmissible``), not for every trial point. None: every state is physical.
+    elements: the problem's element results at u, where the caller asked it to keep them
+        (the sensitivities of ``wrinkle.identification``); None otherwise.
     """
 
     residual: np.ndarray
@@ -84,6 +86,7 @@ class Evaluation:
     metric: np.ndarray | None = None
     reactions: np.ndarray | None = None
     admissibility: Callable[[], str | None] | None = None
+    elements: Any = None
 
     @property
     def inadmissible(self) -> str | None:
