@@ -63,7 +63,7 @@ PARTS = [
     ("wrinkle.materials.neo_hookean", "NeoHookean.response", "material response (neo-Hookean)"),
     ("wrinkle.materials.neo_hookean", "NeoHookean.energy", "material energy (neo-Hookean)"),
     ("wrinkle.element", "MembraneElements._forces_and_stiffness", "kernel sub-blocks (rest)"),
-    ("wrinkle.element", "_nodal_forces", "nodal forces"),
+    ("wrinkle.element", "nodal_forces", "nodal forces"),
     ("wrinkle.compiled", "nodal_forces", "nodal forces"),
     ("wrinkle.compiled", "element_stiffness", "element stiffness (Numba)"),
     ("wrinkle.element", "element_stiffness", "element stiffness (NumPy)"),
