@@ -9,7 +9,7 @@ curve's largest measured value, times the experiment's weight), and SciPy's ``le
 (trust-region reflective, within the parameters' bounds) minimises 1/2 sum r^2 in the
 parameters measured in their scales, theta = p / scale (``FitParameter.scale``).
 
-Their Jacobian comes by the adjoint method (``sensitivity.adjoint_gradients``) from the
+Their Jacobian comes by the adjoint method (``sensitivity.state_sensitivities``) from the
 converged states of the residuals' own forward solves, kept for the Jacobian of the same
 point: one factorised tangent per measured state, whatever the number of parameters. A
 parameter that changes the mesh or the supported values (``gradient = 'finite-difference'``)
@@ -39,11 +39,11 @@ from wrinkle.case import Case
 from wrinkle.identification.problem import Experiment, FitProblem, case_of
 from wrinkle.identification.sensitivity import (
     State,
-    adjoint_gradients,
     force_derivatives,
     functional,
     quantity_values,
     solve_to,
+    state_sensitivities,
     tangent_at,
 )
 from wrinkle.solvers import ConvergenceError
@@ -67,6 +67,11 @@ FORCE_STEP = 1e-5
 # the forward-difference step of a parameter without an adjoint gradient, relative to its
 # scale: solves converged to 1e-10 leave an error of about 1e-5 in the derivative
 DIFFERENCE_STEP = 1e-5
+# the largest move of a parameter, relative to its scale, over which the fit's next forward
+# solve starts from the states predicted to first order (``LocalEngine``): beyond it, the
+# optimiser's first steps of 26-35 % on the 4,096-element sheet of benchmarks/fit_cost.py,
+# the predicted starts cost more factorisations than the last states (docs/fit.md, Cost)
+LINEAR_RANGE = 0.1
 # a residual vector this many times the start's stands for a point whose solve failed: the
 # optimiser takes a shorter step
 FAILED_POINT = 1e3
@@ -134,8 +139,12 @@ def _forward(
     return answer, _Solved(case, system, states)
 
 
-def _adjoint(task: ExperimentTask, solved: _Solved) -> np.ndarray:
-    """dq/dp of the adjoint paths at every state, (n_points, n_quantities, n_adjoint)."""
+def _adjoint(
+    task: ExperimentTask, solved: _Solved, displacements: bool = False
+) -> tuple[np.ndarray, list[np.ndarray | None]]:
+    """dq/dp of the adjoint paths at every state, (n_points, n_quantities, n_adjoint), and,
+    if ``displacements``, each state's du/dp (n_dofs, n_adjoint) or None where the tangent is
+    not symmetric (``state_sensitivities``); an empty list otherwise."""
     experiment = task.experiment
     perturbed = []
     for path, h in zip(task.adjoint, task.steps, strict=True):
@@ -150,14 +159,17 @@ def _adjoint(task: ExperimentTask, solved: _Solved) -> np.ndarray:
         perturbed.append((pair[0], pair[1], h))
     functionals = [functional(solved.case, name) for name in experiment.quantities]
     linear_solver = solved.case.settings.linear_solver
-    gradients = []
+    gradients, slopes = [], []
     for state in solved.states:
         evaluation = tangent_at(solved.system, state)  # shared by dR/dp and the adjoint
         dR = force_derivatives(solved.system, state, perturbed, evaluation)
-        gradients.append(
-            adjoint_gradients(solved.system, state, functionals, dR, linear_solver, evaluation)
+        gradient, du = state_sensitivities(
+            solved.system, state, functionals, dR, linear_solver, evaluation, displacements
         )
-    return np.array(gradients)
+        gradients.append(gradient)
+        if displacements:
+            slopes.append(du)
+    return np.array(gradients), slopes
 
 
 def solve_experiment(task: ExperimentTask) -> ExperimentAnswer:
@@ -167,7 +179,7 @@ def solve_experiment(task: ExperimentTask) -> ExperimentAnswer:
     if solved is not None and task.adjoint:
         started = time.perf_counter()
         try:
-            answer.gradients = _adjoint(task, solved)
+            answer.gradients = _adjoint(task, solved)[0]
             if not np.all(np.isfinite(answer.gradients)):
                 raise ValueError("a gradient is not finite")
         except (ConvergenceError, ValueError) as error:
@@ -176,20 +188,55 @@ def solve_experiment(task: ExperimentTask) -> ExperimentAnswer:
     return answer
 
 
+@dataclass
+class _Slopes:
+    """An experiment's states at the parameter values ``assignment`` with their derivatives
+    du/dp (n_dofs, n_paths) along ``paths`` (None where not known)."""
+
+    assignment: dict[str, float]
+    paths: tuple[str, ...]
+    scales: np.ndarray  # of the paths (``FitParameter.scale``), (n_paths,)
+    states: list[State]
+    du: list[np.ndarray | None]
+
+    def predict(self, assignment: dict[str, float]) -> list[State] | None:
+        """The states at other values, to first order: u + du/dp (p - p0); None where a
+        parameter has moved by more than LINEAR_RANGE of its scale, or is not given."""
+        if not all(path in assignment for path in self.paths):
+            return None
+        dp = np.array([assignment[path] - self.assignment[path] for path in self.paths])
+        if np.any(np.abs(dp) > LINEAR_RANGE * self.scales):
+            return None
+        return [
+            State(state.load_factor, state.u if du is None else state.u + du @ dp)
+            for state, du in zip(self.states, self.du, strict=True)
+        ]
+
+
 class LocalEngine:
     """Solves in this process; the states of the last forward solves are kept, so that the
     Jacobian at the same point takes only the adjoint solves, and the next forward solve of
-    each experiment starts its load levels from them (``solve_to``'s warm states)."""
+    each experiment starts its load levels from them (``solve_to``'s warm states): from the
+    states of the last Jacobian moved by their derivatives along the adjoint paths to first
+    order, where there are such and no parameter has moved by more than LINEAR_RANGE of its
+    scale since, else from the last forward solve's."""
 
     def __init__(self) -> None:
         self._kept: dict[int, tuple[ExperimentTask, _Solved]] = {}
         self._warm: dict[int, list[State]] = {}  # by id of the experiment
+        self._slopes: dict[int, _Slopes] = {}  # by id of the experiment
+
+    def _start(self, task: ExperimentTask) -> list[State] | None:
+        """The warm states of the task's solve (class docstring)."""
+        slopes = self._slopes.get(id(task.experiment))
+        predicted = None if slopes is None else slopes.predict(task.assignment)
+        return predicted if predicted is not None else self._warm.get(id(task.experiment))
 
     def forward(self, tasks: list[ExperimentTask]) -> list[ExperimentAnswer]:
         self._kept.clear()
         answers = []
         for index, task in enumerate(tasks):
-            answer, solved = _forward(task, self._warm.get(id(task.experiment)))
+            answer, solved = _forward(task, self._start(task))
             if solved is not None:
                 self._kept[index] = (task, solved)
                 self._warm[id(task.experiment)] = solved.states
@@ -209,7 +256,11 @@ class LocalEngine:
                     )
                 gradients.append(answer.gradients)
             else:
-                gradient = _adjoint(task, kept[1])
+                gradient, du = _adjoint(task, kept[1], displacements=True)
+                scales = np.array(task.steps) / FORCE_STEP
+                self._slopes[id(task.experiment)] = _Slopes(
+                    dict(task.assignment), tuple(task.adjoint), scales, kept[1].states, du
+                )
                 if not np.all(np.isfinite(gradient)):
                     raise ConvergenceError(
                         f"experiment '{task.experiment.name}': a gradient is not finite", []
@@ -220,11 +271,12 @@ class LocalEngine:
     def values(self, tasks: list[ExperimentTask]) -> list[ExperimentAnswer]:
         """Forward solves whose states are not kept (finite differences), each started
         from the last kept states of its experiment."""
-        return [_forward(task, self._warm.get(id(task.experiment)))[0] for task in tasks]
+        return [_forward(task, self._start(task))[0] for task in tasks]
 
     def close(self) -> None:
         self._kept.clear()
         self._warm.clear()
+        self._slopes.clear()
 
 
 class DaskEngine:

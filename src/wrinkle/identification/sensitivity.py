@@ -46,12 +46,12 @@ __all__ = [
     "Functional",
     "LoadSegment",
     "State",
-    "adjoint_gradients",
     "force_derivatives",
     "functional",
     "quantity_names",
     "quantity_values",
     "solve_to",
+    "state_sensitivities",
     "tangent_at",
 ]
 
@@ -313,24 +313,28 @@ def force_derivatives(
 
 def tangent_at(system: DiscreteSystem, state: State) -> Evaluation:
     """The evaluation at a converged state with the whole tangent d(f* - f)/du, its
-    constrained rows and columns kept, and the element results (``adjoint_gradients``,
+    constrained rows and columns kept, and the element results (``state_sensitivities``,
     ``force_derivatives``)."""
     return system.at(state.load_factor).evaluate(state.u, keep_constrained=True, keep_elements=True)
 
 
-def adjoint_gradients(
+def state_sensitivities(
     system: DiscreteSystem,
     state: State,
     functionals: Sequence[Functional],
     dR: np.ndarray,
     linear_solver: str = "auto",
     evaluation: Evaluation | None = None,
-) -> np.ndarray:
+    displacements: bool = False,
+) -> tuple[np.ndarray, np.ndarray | None]:
     """dq/dp of every quantity at a converged state (module docstring), (n_quantities,
     n_parameters), from dR/dp (n_dofs, n_parameters) (``force_derivatives``): the tangent at
     the state (``tangent_at``, made here unless given as ``evaluation``) is factorised once
     (``linear_solver``, ``wrinkle.solvers.linear``) and each quantity takes one solve with
-    its transpose.
+    its transpose. If ``displacements`` and the tangent is symmetric, also the displacements'
+    derivatives du/dp = -K_aa^-1 dR_a/dp (n_dofs, n_parameters) from the same factorisation,
+    zero at the supports and the unstiffened components (the first-order prediction of the
+    state at other parameter values); else None.
 
     Free components that no element stiffens (the nodes of a wholly slack region: rows of
     the tangent zero to round-off) move without force and change no reaction; the solve
@@ -376,6 +380,13 @@ def adjoint_gradients(
                     [],
                 )
             gradients[row] = explicit - z[active] @ dR[active]
+        du = None
+        if displacements and evaluation.symmetric:
+            du = np.zeros_like(dR)
+            for column in range(dR.shape[1]):
+                load = np.where(active, dR[:, column], 0.0)
+                du[:, column] = -np.real(solve(load)) if np.any(load) else 0.0
+            du[~active] = 0.0
     finally:
         backend.release()
-    return gradients
+    return gradients, du
