@@ -9,7 +9,10 @@ evaluated; the table gives the medians: the fit's seconds per Jacobian (an optim
 iteration: its residual evaluations and one Jacobian), the seconds of one forward solve at
 the start and averaged over the fit's points (a solve at the true values takes up to twice
 as long as at the start here: the sheet wrinkles more), the ratios of an iteration to each,
-and the part the adjoint gradients take of a Jacobian evaluation.
+and the part the adjoint gradients take of a Jacobian evaluation. In turns with each fit, the
+same fit whose warm states are the last forward solve's as they are (``LastStatesEngine``,
+without the first-order prediction from the Jacobian's du/dp): its seconds per iteration and
+its Newton iterations against the fit's.
 
     python benchmarks/fit_cost.py [--repeats 3] [--nx 16 40]
 """
@@ -53,13 +56,16 @@ class TimedEngine(LocalEngine):
         super().__init__()
         self.forward_seconds = 0.0
         self.adjoint_seconds = 0.0
+        self.iterations = 0  # Newton iterations of the forward solves
 
     def forward(self, tasks):
         started = time.perf_counter()
         try:
-            return super().forward(tasks)
+            answers = super().forward(tasks)
         finally:
             self.forward_seconds += time.perf_counter() - started
+        self.iterations += sum(answer.iterations for answer in answers)
+        return answers
 
     def adjoint(self, tasks):
         started = time.perf_counter()
@@ -67,6 +73,14 @@ class TimedEngine(LocalEngine):
             return super().adjoint(tasks)
         finally:
             self.adjoint_seconds += time.perf_counter() - started
+
+
+class LastStatesEngine(TimedEngine):
+    """The fit's engine starting each forward solve from the last one's states as they are
+    (the engine before the first-order prediction, for comparison)."""
+
+    def _start(self, task):
+        return self._warm.get(id(task.experiment))
 
 
 def main() -> None:
@@ -77,7 +91,8 @@ def main() -> None:
     print(
         f"{'elements':>8} {'states':>6} {'evals':>5} {'jacs':>4} {'forward, start [s]':>18} "
         f"{'forward, points [s]':>19} {'fit/iteration [s]':>17} {'ratio, points':>13} "
-        f"{'ratio, start':>12} {'adjoint/iteration [s]':>21}"
+        f"{'ratio, start':>12} {'adjoint/iteration [s]':>21} "
+        f"{'last states: fit/iteration [s]':>30} {'Newton, last states / fit':>25}"
     )
     for nx in args.nx:
         with tempfile.TemporaryDirectory() as scratch:
@@ -93,7 +108,12 @@ def cold_forward(problem, assignment) -> float:
 
 def row(problem, repeats: int, nx: int) -> None:
     at_start, at_points, per_iteration, adjoint_part, counts = [], [], [], [], []
+    last_states, newton = [], (0, 0)
     for _ in range(repeats):
+        started = time.perf_counter()
+        plain_engine = LastStatesEngine()
+        plain = run_fit(problem, plain_engine)
+        last_states.append((time.perf_counter() - started) / plain.jacobians)
         engine = TimedEngine()
         started = time.perf_counter()
         result = run_fit(problem, engine)
@@ -101,6 +121,7 @@ def row(problem, repeats: int, nx: int) -> None:
         per_iteration.append(seconds / result.jacobians)
         adjoint_part.append(engine.adjoint_seconds / result.jacobians)
         counts.append((result.evaluations, result.jacobians))
+        newton = (plain_engine.iterations, engine.iterations)
         at_start.append(cold_forward(problem, problem.start))
         points = [cold_forward(problem, entry["parameters"]) for entry in result.history]
         at_points.append(statistics.mean(points))
@@ -110,7 +131,8 @@ def row(problem, repeats: int, nx: int) -> None:
         f"{2 * nx * (nx // 2):8d} {problem.experiments[0].x.size:6d} {counts[0][0]:5d} "
         f"{counts[0][1]:4d} {start:18.3f} {points:19.3f} {iteration:17.3f} "
         f"{iteration / points:13.2f} {iteration / start:12.2f} "
-        f"{statistics.median(adjoint_part):21.3f}",
+        f"{statistics.median(adjoint_part):21.3f} {statistics.median(last_states):30.3f} "
+        f"{f'{newton[0]} / {newton[1]}':>25}",
         flush=True,
     )
 
