@@ -334,7 +334,7 @@ def state_sensitivities(
     its transpose. If ``displacements`` and the tangent is symmetric, also the displacements'
     derivatives du/dp = -K_aa^-1 dR_a/dp (n_dofs, n_parameters) from the same factorisation,
     zero at the supports and the unstiffened components (the first-order prediction of the
-    state at other parameter values); else None.
+    state at other parameter values); else, or where it is not finite, None.
 
     Free components that no element stiffens (the nodes of a wholly slack region: rows of
     the tangent zero to round-off) move without force and change no reaction; the solve
@@ -387,6 +387,8 @@ def state_sensitivities(
                 load = np.where(active, dR[:, column], 0.0)
                 du[:, column] = -np.real(solve(load)) if np.any(load) else 0.0
             du[~active] = 0.0
+            if not np.all(np.isfinite(du)):
+                du = None  # no prediction rather than a start that cannot be evaluated
     finally:
         backend.release()
     return gradients, du
