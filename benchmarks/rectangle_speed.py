@@ -1,12 +1,16 @@
 """The sheared rectangle (benchmarks/hard_cases/sheared_rectangle.toml) with the solver's cost
-settings of before and after the speed work of issue 18's rectangle (exp18), in turns in one
-run, on meshes nx x nx/2.
+settings of before and after the speed work of issue 18's rectangle, in turns in one run, on
+meshes nx x nx/2.
 
-"old": PARDISO's LDL^T for every symmetric matrix, two steps of iterative refinement per
-solve, and shortened (backtracked) steps evaluated without the stiffness first.
-"new" (the defaults): a Cholesky factorisation tried first (``Pardiso.cholesky``), no
-refinement unless pivots were perturbed (``Pardiso.refinement = 0``), and shortened steps
-evaluated with the stiffness at once (``RegularisedNewton.backtrack_stiffness``).
+"old" (before exp18): PARDISO's LDL^T for every symmetric matrix, two steps of iterative
+refinement per solve, shortened (backtracked) steps evaluated without the stiffness first,
+the whole matrix factorised.
+"whole" (exp18, 3 December 2026): a Cholesky factorisation tried first
+(``Pardiso.cholesky``), no refinement unless pivots were perturbed (``Pardiso.refinement =
+0``), shortened steps evaluated with the stiffness at once
+(``RegularisedNewton.backtrack_stiffness``), the whole matrix factorised.
+"new" (the defaults): as "whole", with only the free block factorised
+(``RegularisedSolver.free_block``, ``wrinkle.solvers.linear.FreeBlock``).
 
 Prints, for each mesh and setting, the median over the rounds of the wall time and of the
 seconds per part (element evaluation, assembly, linear solves, rest), the iterations and
@@ -15,6 +19,7 @@ of a solve to tolerance 1e-8 on the same mesh (new settings).
 
     python benchmarks/rectangle_speed.py                       # 80, 160, 320; 1 round
     python benchmarks/rectangle_speed.py --sizes 320 --rounds 3 --reference
+    python benchmarks/rectangle_speed.py --settings old whole new
 """
 
 from __future__ import annotations
@@ -25,13 +30,14 @@ import time
 from pathlib import Path
 
 from wrinkle.case import read_case
-from wrinkle.solvers import linear, newton
+from wrinkle.solvers import base, linear, newton
 
 CASE = Path(__file__).parent / "hard_cases" / "sheared_rectangle.toml"
 PARTS = ("element evaluation", "assembly", "linear solves", "rest")
 SETTINGS = {
-    "old": {"cholesky": False, "refinement": None, "backtrack_stiffness": False},
-    "new": {"cholesky": True, "refinement": 0, "backtrack_stiffness": True},
+    "old": {"cholesky": False, "refinement": None, "backtrack_stiffness": False, "free": False},
+    "whole": {"cholesky": True, "refinement": 0, "backtrack_stiffness": True, "free": False},
+    "new": {"cholesky": True, "refinement": 0, "backtrack_stiffness": True, "free": True},
 }
 
 
@@ -39,6 +45,7 @@ def apply(setting: dict) -> None:
     linear.Pardiso.cholesky = setting["cholesky"]
     linear.Pardiso.refinement = setting["refinement"]
     newton.RegularisedNewton.backtrack_stiffness = setting["backtrack_stiffness"]
+    base.RegularisedSolver.free_block = setting["free"]
 
 
 def solve(nx: int, setting: dict, tolerance: float | None = None) -> dict:
@@ -65,6 +72,9 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[80, 160, 320])
     parser.add_argument("--rounds", type=int, default=1)
     parser.add_argument("--reference", action="store_true", help="also solve to 1e-8")
+    parser.add_argument(
+        "--settings", nargs="+", default=["whole", "new"], choices=list(SETTINGS), help="in turns"
+    )
     args = parser.parse_args()
     header = (
         f"{'mesh':>9} {'setting':>7} {'iterations':>12} {'factorisations':>15} {'wall s':>7} "
@@ -73,10 +83,10 @@ def main() -> None:
     )
     rows = []
     for nx in args.sizes:
-        runs: dict[str, list[dict]] = {name: [] for name in SETTINGS}
+        runs: dict[str, list[dict]] = {name: [] for name in args.settings}
         for _ in range(args.rounds):
-            for name, setting in SETTINGS.items():
-                runs[name].append(solve(nx, setting))
+            for name in args.settings:
+                runs[name].append(solve(nx, SETTINGS[name]))
         for name, results in runs.items():
             median = {k: statistics.median(r[k] for r in results) for k in ("wall", *PARTS)}
             top = results[-1]["top"]
@@ -88,9 +98,12 @@ def main() -> None:
                 + " ".join(f"{median[p]:8.1f}" for p in PARTS)
                 + f"  ({top[0]:.4f}, {top[1]:.4f})"
             )
-        old, new = (statistics.median(r["wall"] for r in runs[n]) for n in ("old", "new"))
-        rows.append(f"{nx}x{nx // 2:<5} new/old wall {new / old:.2f}")
-        print(*rows[-3:], sep="\n", flush=True)
+        first, last = args.settings[0], args.settings[-1]
+        ratio = statistics.median(r["wall"] for r in runs[last]) / statistics.median(
+            r["wall"] for r in runs[first]
+        )
+        rows.append(f"{nx}x{nx // 2:<5} {last}/{first} wall {ratio:.2f}")
+        print(*rows[-len(args.settings) - 1 :], sep="\n", flush=True)
         if args.reference:
             ref = solve(nx, SETTINGS["new"], tolerance=1e-8)
             rows.append(

@@ -33,6 +33,8 @@ CSV.
         # the first Newton iterations on the 10^6-element airbag
     python benchmarks/scale.py --problems airbag_gmsh_levels airbag_gmsh_nested \
         airbag_gmsh_bending --sizes 72 224 --in-turns   # each size, the three in turn
+    python benchmarks/scale.py --problems shear_stretch --sizes 708 --whole-matrix  # the
+        # solver before the free block (compare with the same command without the flag)
 """
 
 from __future__ import annotations
@@ -384,11 +386,21 @@ def main() -> None:
         help="each size for all the problems in turn (instead of each problem for all sizes), "
         "so that a shared machine's load falls on all alike",
     )
+    parser.add_argument(
+        "--whole-matrix",
+        action="store_true",
+        help="factorise the whole matrix, the held components' stored zeros too (the solver "
+        "before 4 December 2026; RegularisedSolver.free_block = False)",
+    )
     parser.add_argument("--csv", default="scale.csv")
     parser.add_argument("--one", nargs=2, metavar=("PROBLEM", "N"), help=argparse.SUPPRESS)
     parser.add_argument("--progress", help=argparse.SUPPRESS)  # --one's partial rows go here
     args = parser.parse_args()
     if args.one:
+        if args.whole_matrix:
+            from wrinkle.solvers.base import RegularisedSolver
+
+            RegularisedSolver.free_block = False
         row = solve_one(
             args.one[0], int(args.one[1]), args.linear_solver, args.max_iterations, args.progress
         )
@@ -423,6 +435,8 @@ def main() -> None:
             ]
             if args.max_iterations:
                 command += ["--max-iterations", str(args.max_iterations)]
+            if args.whole_matrix:
+                command.append("--whole-matrix")
             try:
                 done = subprocess.run(
                     command,

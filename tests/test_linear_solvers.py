@@ -280,3 +280,110 @@ def test_auto_takes_pardiso_above_its_size_and_reaches_the_superlu_solution():
         assert type(solver.linear).__name__ == ("Pardiso" if name == "auto" else "SuperLU")
     u_ref = displacements["superlu"]
     assert np.abs(displacements["auto"] - u_ref).max() <= 1e-9 * np.abs(u_ref).max()
+
+
+def held_rows_matrix(negative: bool = False) -> tuple[sp.csr_matrix, np.ndarray]:
+    """spd_matrix with every third row and column held as the solvers hold them: entries
+    zeroed but kept in the pattern, the diagonal one (minus one with negative=True, for the
+    inertia). Shifted to be indefinite on the free block. Returns (A, free)."""
+    A = spd_matrix()
+    A.setdiag(A.diagonal() - 0.9 * A.diagonal().mean())
+    n = A.shape[0]
+    free = np.arange(n) % 3 != 1
+    rows = np.repeat(np.arange(n), np.diff(A.indptr))
+    held = ~free[rows] | ~free[A.indices]
+    A.data[held] = 0.0
+    A.data[held & (rows == A.indices)] = -1.0 if negative else 1.0
+    assert A.nnz == spd_matrix().nnz  # the zeros stay stored
+    return A, free
+
+
+class _Sizes(_Recorder):
+    """A _Recorder that also records the size of each matrix it is given."""
+
+    def __init__(self):
+        super().__init__()
+        self.sizes = []
+
+    def factorise(self, A, symmetric):
+        self.sizes.append(A.shape[0])
+        return super().factorise(A, symmetric)
+
+
+@pytest.mark.parametrize("name", BACKENDS)
+@pytest.mark.parametrize("negative", [False, True])
+def test_the_free_block_alone_is_factorised(name, negative):
+    """A matrix whose held rows and columns carry only their diagonal is solved by
+    factorising its free block (``FreeBlock``), with x = b / A_cc on the held components: the
+    whole matrix's solution to round-off, its inertia (held diagonal of -1 included) exactly,
+    on every back-end; real and complex."""
+    A, free = held_rows_matrix(negative)
+    b = np.random.default_rng(4).normal(size=A.shape[0])
+    dense = A.toarray()
+    solver = RegularisedNewton(linear_solver=name)
+    if name not in ("cholmod", "amg"):  # symmetric positive definite only
+        x = solver.factorise(A, True, free)(b)
+        assert np.abs(x - np.linalg.solve(dense, b)).max() <= 1e-10 * np.abs(x).max()
+        negative_count = int(np.count_nonzero(np.linalg.eigvalsh(dense) < 0.0))
+        assert negative_count > 0
+        assert solver.negative_eigenvalues(A, free) == negative_count
+    spd = A.copy()
+    spd.data[np.repeat(np.arange(A.shape[0]), np.diff(A.indptr)) == A.indices] += (
+        5.0 * np.abs(A.data).max() * A.shape[0] ** 0.5
+    )
+    spd.data[diagonal_positions(spd)[~free]] = 2.0
+    x = solver.factorise(spd, True, free)(b)
+    assert np.abs(spd @ x - b).max() <= 1e-8 * np.abs(b).max()
+    np.testing.assert_allclose(x[~free], b[~free] / 2.0, rtol=1e-15)
+    complex_A = shifted(A, -0.3j, free)
+    complex_solve = RegularisedNewton(linear_solver="superlu").factorise(complex_A, True, free)
+    z = complex_solve(b)
+    assert np.abs(complex_A @ z - b).max() <= 1e-10 * np.abs(z).max()
+
+
+def test_only_a_matrix_with_bare_held_rows_is_split():
+    """The back-end gets the free block where the held rows and columns are bare, and the
+    whole matrix where one of them carries an entry off the diagonal (or where nothing is
+    held, or the solver is told not to split); the solutions agree."""
+    A, free = held_rows_matrix()
+    b = np.random.default_rng(5).normal(size=A.shape[0])
+    solver = RegularisedNewton()
+    solver.linear = _Sizes()
+    x_block = solver.factorise(A, True, free)(b)
+    x_all = solver.factorise(A, True)(b)
+    x_no_hold = solver.factorise(A, True, np.ones_like(free))(b)
+    coupled = A.copy()
+    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+    coupled.data[np.flatnonzero(~free[rows] & (rows != A.indices))[0]] = 1e-3
+    x_coupled = solver.factorise(coupled, False, free)(b)
+    solver.free_block = False
+    solver.factorise(A, True, free)
+    n = A.shape[0]
+    assert solver.linear.sizes == [int(free.sum()), n, n, n, n]
+    np.testing.assert_allclose(x_block, x_all, rtol=0, atol=1e-12 * np.abs(x_all).max())
+    np.testing.assert_array_equal(x_no_hold, x_all)
+    assert np.abs(coupled @ x_coupled - b).max() <= 1e-10 * np.abs(x_coupled).max()
+
+
+def test_the_same_solutions_from_the_free_block(monkeypatch):
+    """The shear-stretch square (its boundary held) reaches the same homogeneous solution, and
+    the sheared rectangle with free sides (every z held: a third of the unknowns) the same
+    top-edge reaction in the same iterations, whether the held components' stored zeros are
+    factorised or left out. (The rectangle's slack corners cost no energy: their nodes are
+    not determined to round-off, so the displacements are not compared there.)"""
+    rectangle = Path(__file__).resolve().parents[1] / "benchmarks" / "hard_cases"
+    rectangle = rectangle / "sheared_rectangle.toml"
+    runs = {}
+    for split in (True, False):
+        monkeypatch.setattr(RegularisedNewton, "free_block", split)
+        square = read_case(SHEAR_STRETCH, {"mesh": {"rectangle": {"nx": 12, "ny": 12}}})
+        sheet = read_case(rectangle, {"mesh": {"rectangle": {"nx": 16, "ny": 8}}})
+        runs[split] = (square.solve(tolerance=1e-10), sheet, sheet.solve())
+    (square, _, sheet), (square_ref, model, sheet_ref) = runs[True], runs[False]
+    u, u_ref = square.final.displacement, square_ref.final.displacement
+    assert np.abs(u - u_ref).max() <= 1e-9 * np.abs(u_ref).max()
+    assert sheet.final.iterations == sheet_ref.final.iterations
+    top, top_ref = (
+        model.model.support_reactions(r.final.reactions)["top"] for r in (sheet, sheet_ref)
+    )
+    assert np.linalg.norm(np.subtract(top, top_ref)) <= 1e-6 * np.linalg.norm(top_ref)

@@ -15,6 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from wrinkle.solvers.linear import (
+    FreeBlock,
     SuperLU,
     SymmetryCheck,
     diagonal_positions,
@@ -227,6 +228,22 @@ def stiffness_scale(K: sp.csr_matrix, free: np.ndarray) -> float:
     return scale if scale > 0.0 else 1.0
 
 
+def _with_held(
+    solve: Callable[[np.ndarray], np.ndarray], free: np.ndarray, held: np.ndarray
+) -> Callable[[np.ndarray], np.ndarray]:
+    """The solve of A x = b from the solve of its free block: x_f = A_ff^-1 b_f and
+    x_c = b_c / A_cc (``FreeBlock``). (n_dofs,) in and out."""
+
+    def solve_all(b: np.ndarray) -> np.ndarray:
+        x_free = solve(np.ascontiguousarray(b[free]))
+        x = np.empty(b.shape, dtype=np.result_type(x_free, b, held))
+        x[free] = x_free
+        x[~free] = b[~free] / held
+        return x
+
+    return solve_all
+
+
 def shifted(
     K: sp.csr_matrix, shift: complex, free: np.ndarray, diagonal: np.ndarray | None = None
 ) -> sp.csr_matrix:
@@ -299,6 +316,9 @@ class RegularisedSolver(ABC):
     # (``Model.tangent_prediction``)
     tangent_predictor = True
     max_rejections = 40
+    #: factorise the free block of a matrix whose constrained rows and columns hold only
+    #: their diagonal (``FreeBlock``; False: the whole matrix, as before 4 December 2026)
+    free_block = True
 
     def __init__(
         self,
@@ -318,22 +338,33 @@ class RegularisedSolver(ABC):
         # the back-end, made at the first solve (it depends on the size)
         self.linear: LinearSolver | None = None
         self._is_symmetric = SymmetryCheck()
+        self._free_block = FreeBlock()
         self._timer = Stopwatch()
 
     def factorise(
-        self, A: sp.csr_matrix, symmetric: bool
+        self, A: sp.csr_matrix, symmetric: bool, free: np.ndarray | None = None
     ) -> Callable[[np.ndarray], np.ndarray] | None:
         """Solve function of the linear back-end for A (None if A is singular); the time of
         both goes to the problem's stopwatch. A matrix not known to be symmetric is checked
         (``SymmetryCheck``): the assembled tangent under follower pressure often is (the
-        airbag's, to round-off), and the back-ends factorise symmetric matrices faster."""
+        airbag's, to round-off), and the back-ends factorise symmetric matrices faster.
+        free: (n_dofs,) bool, the free components; where A's constrained rows and columns
+        hold only their diagonal, the back-end factorises the free block alone
+        (``FreeBlock``)."""
         if self.linear is None:
             self.linear = make_linear_solver(self.linear_solver, A.shape[0])
         linear, timer = self.linear, self._timer
         with timer.part(LINEAR):
             if not symmetric and not np.iscomplexobj(A.data):
                 symmetric = self._is_symmetric(A)
-            solve = linear.factorise(A, symmetric)
+            split = self._split(A, free)
+            if split is None:
+                solve = linear.factorise(A, symmetric)
+            else:
+                block, held = split
+                solve = linear.factorise(block, symmetric)
+                if solve is not None and free is not None:
+                    solve = _with_held(solve, free, held)
         timer.factorisations += 1
         if solve is None:
             return None
@@ -345,11 +376,21 @@ class RegularisedSolver(ABC):
 
         return timed_solve
 
+    def _split(
+        self, A: sp.csr_matrix, free: np.ndarray | None
+    ) -> tuple[sp.csr_matrix, np.ndarray] | None:
+        """``FreeBlock.split`` of A, or None where there is nothing held or no block."""
+        if not self.free_block or free is None or bool(np.all(free)):
+            return None
+        if not A.has_sorted_indices:
+            return None
+        return self._free_block.split(A, free)
+
     def is_symmetric(self, A: sp.csr_matrix) -> bool:
         """Whether A is symmetric to round-off (``SymmetryCheck``)."""
         return bool(self._is_symmetric(A))
 
-    def negative_eigenvalues(self, A: sp.csr_matrix) -> int | None:
+    def negative_eigenvalues(self, A: sp.csr_matrix, free: np.ndarray | None = None) -> int | None:
         """The number of negative eigenvalues of the symmetric matrix A, from a
         factorisation by the linear back-end (PARDISO's or SuperLU's inertia; the other
         back-ends hand the matrix to SuperLU); None where it cannot be had. The time and
@@ -360,7 +401,14 @@ class RegularisedSolver(ABC):
         if count is None:
             count = SuperLU().negative_pivots
         with self._timer.part(LINEAR):
-            negative = count(A)
+            split = self._split(A, free)
+            if split is None:
+                negative = count(A)
+            else:  # the held diagonal's own signs, by Sylvester's law
+                block, held = split
+                negative = count(block)
+                if negative is not None:
+                    negative += int(np.count_nonzero(held < 0.0))
         self._timer.factorisations += 1
         return negative
 

@@ -309,7 +309,7 @@ def _bordered_step(
     (``RegularisedNewton.regularised``), by one factorisation and two solves; None if it is
     singular."""
     K = solver.regularised(ev, theta, free)
-    solve = solver.factorise(K, ev.symmetric)
+    solve = solver.factorise(K, ev.symmetric, free)
     if solve is None:
         return None
     a = solve(ev.residual)

@@ -84,7 +84,7 @@ class RegularisedNewton(RegularisedSolver):
         quadratic model, or (no potential, or a decrease at round-off) |r|^2 by its
         Gauss-Newton model. From a flat membrane under pressure only the energy model sees the
         benefit of moving out of plane (the tangent has no out-of-plane stiffness there)."""
-        solve = self.factorise(self.regularised(ev, theta, free), ev.symmetric)
+        solve = self.factorise(self.regularised(ev, theta, free), ev.symmetric, free)
         if solve is None:
             return None, 0.0
         step = solve(ev.residual)

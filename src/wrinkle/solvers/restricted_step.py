@@ -48,7 +48,7 @@ class RestrictedStep(RegularisedSolver):
         solve: Callable[[np.ndarray], np.ndarray] | None
         if ev.symmetric:
             mu = np.sqrt(theta / 2.0)
-            complex_solve = self.factorise(shifted(K, -1j * mu, free, ev.diagonal), True)
+            complex_solve = self.factorise(shifted(K, -1j * mu, free, ev.diagonal), True, free)
             if complex_solve is None:
                 return None, 0.0
             factorised = complex_solve
@@ -60,7 +60,7 @@ class RestrictedStep(RegularisedSolver):
         else:  # follower loads: form 2 K^T K (denser) as the paper does
             normal = (K.T @ K).tocsr()
             normal.sort_indices()
-            solve = self.factorise(shifted(normal, theta / 2.0, free), True)
+            solve = self.factorise(shifted(normal, theta / 2.0, free), True, free)
             rhs = K.T @ r
         if solve is None:
             return None, 0.0

@@ -33,4 +33,4 @@ def unstable_modes(solver: RegularisedSolver, ev: Evaluation, free: np.ndarray) 
     if not (ev.symmetric or solver.is_symmetric(K)):
         return None
     A = shifted(K, UNSTABLE * stiffness_scale(K, free), free, ev.diagonal)
-    return solver.negative_eigenvalues(A)
+    return solver.negative_eigenvalues(A, free)
