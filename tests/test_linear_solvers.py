@@ -343,8 +343,9 @@ def test_the_free_block_alone_is_factorised(name, negative):
 
 def test_only_a_matrix_with_bare_held_rows_is_split():
     """The back-end gets the free block where the held rows and columns are bare, and the
-    whole matrix where one of them carries an entry off the diagonal (or where nothing is
-    held, or the solver is told not to split); the solutions agree."""
+    whole matrix where one of them carries an entry off the diagonal, where nothing is held,
+    where the held components' entries are too few to pay, or where the solver is told not to
+    split; the solutions agree."""
     A, free = held_rows_matrix()
     b = np.random.default_rng(5).normal(size=A.shape[0])
     solver = RegularisedNewton()
@@ -356,10 +357,14 @@ def test_only_a_matrix_with_bare_held_rows_is_split():
     rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
     coupled.data[np.flatnonzero(~free[rows] & (rows != A.indices))[0]] = 1e-3
     x_coupled = solver.factorise(coupled, False, free)(b)
+    one_held = np.ones_like(free)
+    one_held[np.flatnonzero(~free)[0]] = False  # its entries: below FreeBlock.MIN_SHARE
+    x_one_held = solver.factorise(A, True, one_held)(b)
     solver.free_block = False
     solver.factorise(A, True, free)
     n = A.shape[0]
-    assert solver.linear.sizes == [int(free.sum()), n, n, n, n]
+    assert solver.linear.sizes == [int(free.sum()), n, n, n, n, n]
+    assert np.abs(A @ x_one_held - b).max() <= 1e-10 * np.abs(x_one_held).max()
     np.testing.assert_allclose(x_block, x_all, rtol=0, atol=1e-12 * np.abs(x_all).max())
     np.testing.assert_array_equal(x_no_hold, x_all)
     assert np.abs(coupled @ x_coupled - b).max() <= 1e-10 * np.abs(x_coupled).max()

@@ -183,7 +183,15 @@ class FreeBlock:
     are such zeros and PARDISO's Cholesky took 0.19 s against 0.076 s for A_ff
     (docs/notes/2026-12-rectangle-speed.md). The positions of A_ff in A.data are found once
     per pattern and set of free components; the block's index arrays are the same objects
-    every time, so the back-ends reuse their ordering."""
+    every time, so the back-ends reuse their ordering.
+
+    Only where the entries outside A_ff are at least MIN_SHARE of the stored ones: the
+    positions and each block's copy of the values cost memory, 82 MB more at the peak of the
+    100,352-element nested airbag with bending (held at its seams and symmetry lines: under 1 %
+    of the entries), and saved no time there (28.8 s against 29.9 and 28.1 s for the whole
+    matrix, in turns, another job running; benchmarks/scale.py --whole-matrix)."""
+
+    MIN_SHARE = 0.1
 
     def __init__(self) -> None:
         self._pattern = _PatternCache()
@@ -195,21 +203,29 @@ class FreeBlock:
 
     def _prepare(self, A: sp.csr_matrix, free: np.ndarray) -> None:
         """Find the positions for A's pattern and ``free``."""
+        self._layout = None
+        # the entries outside A_ff are at most twice those of the held rows (the pattern is
+        # structurally symmetric): decide before the arrays of nnz entries are made
+        if 2 * int(np.diff(A.indptr)[~free].sum()) < self.MIN_SHARE * A.nnz:
+            return
         rows = _row_indices(A)
         columns = A.indices
         kept = free[rows] & free[columns]
         on_diagonal = rows == columns
         held_diagonal = np.flatnonzero(on_diagonal & ~free[rows])
-        self._layout = None
         if held_diagonal.size != np.count_nonzero(~free):
             return
+        kept_count = int(np.count_nonzero(kept))
+        if A.nnz - kept_count < self.MIN_SHARE * A.nnz:
+            return
+        index = np.int32 if A.nnz < np.iinfo(np.int32).max else np.int64
         number = np.cumsum(free) - 1  # the free components' numbers in A_ff
-        positions = np.flatnonzero(kept)
+        positions = np.flatnonzero(kept).astype(index)
         counts = np.bincount(number[rows[positions]], minlength=int(np.count_nonzero(free)))
         indptr = np.concatenate(([0], np.cumsum(counts))).astype(A.indptr.dtype)
         indices = number[columns[positions]].astype(A.indices.dtype)
-        off = np.flatnonzero(~kept & ~on_diagonal)
-        self._layout = (positions, off, held_diagonal, indptr, indices)
+        off = np.flatnonzero(~kept & ~on_diagonal).astype(index)
+        self._layout = (positions, off, held_diagonal.astype(index), indptr, indices)
 
     def split(self, A: sp.csr_matrix, free: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray] | None:
         """(A_ff, A's held diagonal) if A has the structure of the class docstring (sorted
