@@ -1,10 +1,13 @@
 """The load path (wrinkle.solvers.stepping): the step controller's rules, checked against
 increment sequences worked out by hand, and the path follower on a real model."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import wrinkle
+from wrinkle.case import read_case
 from wrinkle.materials import StVenantKirchhoff
 from wrinkle.solvers import ConvergenceError, SolverSettings, StepController, follow_load_path
 from wrinkle.solvers.base import Evaluation, SolverResult
@@ -197,3 +200,20 @@ def test_model_solve_takes_the_controller_settings():
     assert [s.load_factor for s in two.steps] == [0.5, 1.0]
     np.testing.assert_allclose([s.load_factor for s in eight.steps], np.arange(1, 9) / 8)
     np.testing.assert_allclose(eight.final.displacement, two.final.displacement, atol=1e-9)
+
+
+@pytest.mark.parametrize("pressure", [True, False])
+def test_a_path_under_pressure_that_reaches_no_level_names_the_remedy(pressure):
+    """An airbag (8 x 8 quarter mesh) whose Newton is allowed 2 iterations converges at no
+    load level: the error says that a pressure on a flat sheet is harder the smaller it is and
+    names the bending stiffness; the pulled-node fan, moved by its support alone, fails the
+    same way without that hint."""
+    root = Path(__file__).resolve().parents[1]
+    path = root / ("examples/airbag.toml" if pressure else "benchmarks/hard_cases/pulled_node.toml")
+    mesh = {"rectangle": {"nx": 8, "ny": 8}}
+    case = read_case(path, {"mesh": mesh, "solver": {"max_iterations": 2, "min_step": 0.3}})
+    with pytest.raises(ConvergenceError, match="minimum 0.3") as caught:
+        case.solve()
+    assert ("bending = true" in str(caught.value)) == pressure
+    assert ("harder the smaller" in str(caught.value)) == pressure
+    assert caught.value.reached == 0.0

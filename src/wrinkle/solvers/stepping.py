@@ -86,6 +86,15 @@ class LoadLevels(Protocol):
     ) -> SteppedProblem: ...
 
 
+# said where a path under pressure fails before any load level converges (docs/solvers.md,
+# the step controller): the cut-backs of the first step went down to min_step in vain
+SMALL_PRESSURE_HINT = (
+    "no load level converged; on a membrane that starts flat and unstressed a pressure is "
+    "harder the smaller it is, so cutting the step back does not help: give the sheet its "
+    "bending stiffness ([material] bending = true; docs/solvers.md, Load stepping)"
+)
+
+
 @dataclass(frozen=True)
 class StepController:
     """Increments of the load factor.
@@ -428,6 +437,12 @@ class Resume:
     increment: float
 
 
+def _under_pressure(system: LoadLevels) -> bool:
+    """Whether the system's loads include a pressure (a ``DiscreteSystem``'s ``loading``)."""
+    loading = getattr(system, "loading", None)
+    return loading is not None and bool(np.any(loading.pressure))
+
+
 def follow_load_path(
     system: LoadLevels,
     solver: RegularisedSolver,
@@ -512,6 +527,8 @@ def follow_load_path(
                     f"load step to factor {trial_factor:.6g} failed with increment "
                     f"{increment:.3g} (minimum {controller.min_step:.3g}): {error}"
                 )
+                if previous is None and _under_pressure(system):
+                    message += f"; {SMALL_PRESSURE_HINT}"
                 relative = slope.limit_point()
                 if relative is not None or isinstance(error, PastALimit):
                     fell = (
