@@ -18,6 +18,7 @@ from wrinkle.solvers.base import shifted
 from wrinkle.solvers.linear import (
     AUTO_PARDISO_DOFS,
     LINEAR_SOLVERS,
+    FreeBlock,
     SuperLU,
     SymmetryCheck,
     diagonal_positions,
@@ -59,6 +60,11 @@ def spd_matrix(n: int = 60, seed: int = 3) -> sp.csr_matrix:
     return A
 
 
+def rows_of(A: sp.csr_matrix) -> np.ndarray:
+    """The row of each stored entry of A, (nnz,)."""
+    return np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+
+
 def test_shifted_adds_on_free_diagonal_only():
     A = spd_matrix()
     free = np.arange(A.shape[0]) % 4 != 0
@@ -95,9 +101,7 @@ def test_symmetry_check_and_upper_triangle():
     check = SymmetryCheck()
     assert check(A)
     B = A.copy()
-    off_diagonal = np.flatnonzero(np.repeat(np.arange(B.shape[0]), np.diff(B.indptr)) != B.indices)[
-        0
-    ]
+    off_diagonal = np.flatnonzero(rows_of(B) != B.indices)[0]
     B.data[off_diagonal] *= 1.0 + 1e-15  # round-off: still symmetric
     assert check(B)
     B.data[off_diagonal] *= 1.0 + 1e-6
@@ -139,7 +143,7 @@ def test_a_symmetric_tangent_goes_to_the_back_end_as_symmetric():
     solver.linear = _Recorder()
     solver.factorise(K, False)
     skewed = K.copy()
-    rows = np.repeat(np.arange(K.shape[0]), np.diff(K.indptr))
+    rows = rows_of(K)
     upper = (skewed.indices > rows) & (np.abs(skewed.data) > 1e-3 * np.abs(K.data).max())
     skewed.data[upper] *= 1.01  # the upper triangle's larger entries only
     solver.factorise(skewed, False)
@@ -290,7 +294,7 @@ def held_rows_matrix(negative: bool = False) -> tuple[sp.csr_matrix, np.ndarray]
     A.setdiag(A.diagonal() - 0.9 * A.diagonal().mean())
     n = A.shape[0]
     free = np.arange(n) % 3 != 1
-    rows = np.repeat(np.arange(n), np.diff(A.indptr))
+    rows = rows_of(A)
     held = ~free[rows] | ~free[A.indices]
     A.data[held] = 0.0
     A.data[held & (rows == A.indices)] = -1.0 if negative else 1.0
@@ -321,6 +325,9 @@ def test_the_free_block_alone_is_factorised(name, negative):
     b = np.random.default_rng(4).normal(size=A.shape[0])
     dense = A.toarray()
     solver = RegularisedNewton(linear_solver=name)
+    block, held = FreeBlock().split(A, free)  # the path these solves take
+    np.testing.assert_array_equal(block.toarray(), dense[np.ix_(free, free)])
+    np.testing.assert_array_equal(held, np.diag(dense)[~free])
     if name not in ("cholmod", "amg"):  # symmetric positive definite only
         x = solver.factorise(A, True, free)(b)
         assert np.abs(x - np.linalg.solve(dense, b)).max() <= 1e-10 * np.abs(x).max()
@@ -328,9 +335,7 @@ def test_the_free_block_alone_is_factorised(name, negative):
         assert negative_count > 0
         assert solver.negative_eigenvalues(A, free) == negative_count
     spd = A.copy()
-    spd.data[np.repeat(np.arange(A.shape[0]), np.diff(A.indptr)) == A.indices] += (
-        5.0 * np.abs(A.data).max() * A.shape[0] ** 0.5
-    )
+    spd.data[rows_of(A) == A.indices] += 5.0 * np.abs(A.data).max() * A.shape[0] ** 0.5
     spd.data[diagonal_positions(spd)[~free]] = 2.0
     x = solver.factorise(spd, True, free)(b)
     assert np.abs(spd @ x - b).max() <= 1e-8 * np.abs(b).max()
@@ -354,7 +359,7 @@ def test_only_a_matrix_with_bare_held_rows_is_split():
     x_all = solver.factorise(A, True)(b)
     x_no_hold = solver.factorise(A, True, np.ones_like(free))(b)
     coupled = A.copy()
-    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+    rows = rows_of(A)
     coupled.data[np.flatnonzero(~free[rows] & (rows != A.indices))[0]] = 1e-3
     x_coupled = solver.factorise(coupled, False, free)(b)
     one_held = np.ones_like(free)
@@ -370,6 +375,32 @@ def test_only_a_matrix_with_bare_held_rows_is_split():
     assert np.abs(coupled @ x_coupled - b).max() <= 1e-10 * np.abs(x_coupled).max()
 
 
+def test_the_free_block_follows_the_pattern_and_refuses_coupled_held_entries():
+    """One FreeBlock given matrices of two patterns with the same free components takes each
+    one's own block; it gives no block where a free row carries an entry in a held column,
+    where a held diagonal is zero, or where the indices are not sorted."""
+    blocks = FreeBlock()
+    A, free = held_rows_matrix()
+    B = spd_matrix(seed=7)
+    rows = rows_of(B)
+    B.data[~free[rows] | ~free[B.indices]] = 0.0
+    B.data[~free[rows] & (rows == B.indices)] = 3.0
+    assert B.nnz != A.nnz
+    for M in (A, B, A):
+        block, held = blocks.split(M, free)
+        np.testing.assert_array_equal(block.toarray(), M.toarray()[np.ix_(free, free)])
+        np.testing.assert_array_equal(held, M.diagonal()[~free])
+    column = A.copy()  # a free row's entry in a held column
+    column.data[np.flatnonzero(free[rows_of(A)] & ~free[A.indices])[0]] = 1e-3
+    assert blocks.split(column, free) is None
+    zero = A.copy()
+    zero.data[diagonal_positions(zero)[~free][0]] = 0.0
+    assert blocks.split(zero, free) is None
+    unsorted = sp.csr_matrix((A.data[::-1].copy(), A.indices[::-1].copy(), A.indptr), A.shape)
+    unsorted.has_sorted_indices = False
+    assert blocks.split(unsorted, free) is None
+
+
 def test_the_same_solutions_from_the_free_block(monkeypatch):
     """The shear-stretch square (its boundary held) reaches the same homogeneous solution, and
     the sheared rectangle with free sides (every z held: a third of the unknowns) the same
@@ -379,6 +410,15 @@ def test_the_same_solutions_from_the_free_block(monkeypatch):
     rectangle = Path(__file__).resolve().parents[1] / "benchmarks" / "hard_cases"
     rectangle = rectangle / "sheared_rectangle.toml"
     runs = {}
+    taken = []
+    split_block = FreeBlock.split
+
+    def counted(self, A, free):
+        block = split_block(self, A, free)
+        taken.append(block is not None)
+        return block
+
+    monkeypatch.setattr(FreeBlock, "split", counted)
     for split in (True, False):
         monkeypatch.setattr(RegularisedNewton, "free_block", split)
         square = read_case(SHEAR_STRETCH, {"mesh": {"rectangle": {"nx": 12, "ny": 12}}})
@@ -392,3 +432,4 @@ def test_the_same_solutions_from_the_free_block(monkeypatch):
         model.model.support_reactions(r.final.reactions)["top"] for r in (sheet, sheet_ref)
     )
     assert np.linalg.norm(np.subtract(top, top_ref)) <= 1e-6 * np.linalg.norm(top_ref)
+    assert taken and all(taken)  # every factorisation with the split on took the block

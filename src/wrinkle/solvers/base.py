@@ -382,8 +382,6 @@ class RegularisedSolver(ABC):
         """``FreeBlock.split`` of A, or None where there is nothing held or no block."""
         if not self.free_block or free is None or bool(np.all(free)):
             return None
-        if not A.has_sorted_indices:
-            return None
         return self._free_block.split(A, free)
 
     def is_symmetric(self, A: sp.csr_matrix) -> bool:

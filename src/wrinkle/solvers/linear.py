@@ -182,8 +182,8 @@ class FreeBlock:
     whose z components are all held (155,043 unknowns, 102,078 free), half the stored entries
     are such zeros and PARDISO's Cholesky took 0.19 s against 0.076 s for A_ff
     (docs/notes/2026-12-rectangle-speed.md). The positions of A_ff in A.data are found once
-    per pattern and set of free components; the block's index arrays are the same objects
-    every time, so the back-ends reuse their ordering.
+    per pattern and set of free components; the block's index arrays are kept, so a back-end
+    sees the same pattern each time (after comparing the arrays) and reuses its ordering.
 
     Only where the entries outside A_ff are at least MIN_SHARE of the stored ones: the
     positions and each block's copy of the values cost memory, 82 MB more at the peak of the
@@ -230,6 +230,8 @@ class FreeBlock:
     def split(self, A: sp.csr_matrix, free: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray] | None:
         """(A_ff, A's held diagonal) if A has the structure of the class docstring (sorted
         indices; free (n,) bool, at least one component held), else None."""
+        if not A.has_sorted_indices:
+            return None
         if (
             not self._pattern.same(A)
             or self._free is None

@@ -438,9 +438,12 @@ class Resume:
 
 
 def _under_pressure(system: LoadLevels) -> bool:
-    """Whether the system's loads include a pressure (a ``DiscreteSystem``'s ``loading``)."""
+    """Whether the system's loads include a pressure (a ``DiscreteSystem``'s ``loading``) on
+    a sheet without bending stiffness (``SMALL_PRESSURE_HINT`` names it as the remedy)."""
     loading = getattr(system, "loading", None)
-    return loading is not None and bool(np.any(loading.pressure))
+    if loading is None or getattr(system, "bending", None) is not None:
+        return False
+    return bool(np.any(loading.pressure))
 
 
 def follow_load_path(
