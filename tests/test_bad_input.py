@@ -716,6 +716,7 @@ MORE = [
     ("max_step 2", append("[solver]\nmax_step = 2.0"), "max_step"),
     ("max_step below min_step", append("[solver]\nmin_step = 0.5\nmax_step = 0.1"), "max_step"),
     ("target_iterations negative", append("[solver]\ntarget_iterations = -1"), "target_iterations"),
+    ("regrow_after negative", append("[solver]\nregrow_after = -1"), "regrow_after"),
     ("nested without refine", append("[solver]\nnested = true"), "refine >= 1 or [mesh] levels"),
     ("nested text", append('[solver]\nnested = "yes"'), "nested"),
     ("convergence unknown", append('[solver]\nconvergence = "energy"'), "unknown convergence"),

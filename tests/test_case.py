@@ -45,6 +45,7 @@ max_step = 0.5
 cutback = 0.25
 growth = 1.5
 target_iterations = 3
+regrow_after = 3
 tolerance = 1e-9
 """,
     )
@@ -56,8 +57,10 @@ tolerance = 1e-9
         cutback=0.25,
         growth=1.5,
         target_iterations=3,
+        regrow_after=3,
         tolerance=1e-9,
     )
+    assert case.settings.controller().regrow_after == 3
     assert case.title == "pulled sheet" and case.source == path
     assert case.units == {"length": "m", "force": "N"}
 
@@ -69,6 +72,7 @@ tolerance = 1e-9
         ("growth = 0.5", "[solver]: solver growth must be a number >= 1, got 0.5"),
         ("max_step = 2.0", "[solver]: solver max_step must be a number in [min_step, 1]"),
         ("target_iterations = 2.5", "[solver]: 'target_iterations' must be an integer"),
+        ("regrow_after = 1.5", "[solver]: 'regrow_after' must be an integer"),
         ("cutback = -1", "[solver]: 'cutback' must be > 0"),
         ("steps = 0", "[solver]: 'steps' must be >= 1"),
         ("step = 3", "[solver]: unknown key 'step'"),

@@ -24,7 +24,7 @@ from wrinkle.materials import StVenantKirchhoff
 from wrinkle.plot import _load_column
 from wrinkle.selectors import select_nodes
 from wrinkle.solvers import ConvergenceError, SolverSettings
-from wrinkle.staging import AnalysisStep, solve_steps
+from wrinkle.staging import AnalysisStep, restart_point, solve_steps
 
 ROOT = Path(__file__).resolve().parents[1]
 TUBE = ROOT / "verification" / "cases" / "inflated_cylinder.toml"
@@ -401,3 +401,31 @@ def test_pressures_that_cancel_are_reported_as_zero_with_their_volume():
     assert vented.final.pressure == pytest.approx(0.0, abs=1e-12)
     assert inflated.final.enclosed_volume > 0
     assert abs(vented.final.enclosed_volume) < 1e-4 * inflated.final.enclosed_volume  # flat
+
+
+@pytest.mark.parametrize(
+    "factors, increment, in_a_row",
+    [
+        ([0.25, 0.375], 0.125, 1),  # one step at the cut increment: it stays
+        ([0.25, 0.375, 0.5], 0.25, 0),  # two in a row: it grows back (rule 6)
+        ([0.25, 0.5], 0.25, 2),  # the first increment, two in a row: nothing to undo
+    ],
+)
+def test_a_restart_counts_the_steps_in_a_row_at_the_last_increment(factors, increment, in_a_row):
+    """``restart_point`` rebuilds the step controller's state from the saved levels: the
+    increment of the last, how many before it had the same one, and the growth that the
+    uninterrupted run would have made (steps = 4, every step 9 iterations: not easy)."""
+    model = roof(wrinkle.rectangle(10.0, 10.0, 4, 4))
+    steps = [
+        AnalysisStep(
+            "prestress",
+            supports=("west", "east", "south", "north"),
+            settings=SolverSettings(steps=4),
+        )
+    ]
+    saved = [{"analysis_step": 1, "load_factor": f, "iterations": 9} for f in factors]
+    _, _, resume = restart_point(model, steps, saved, lambda i: np.zeros(model.n_dofs))
+    assert resume is not None
+    assert resume.factor == factors[-1] and resume.previous[0] == (factors[-2])
+    assert resume.increment == pytest.approx(increment)
+    assert resume.in_a_row == in_a_row

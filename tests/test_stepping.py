@@ -11,6 +11,7 @@ from wrinkle.case import read_case
 from wrinkle.materials import StVenantKirchhoff
 from wrinkle.solvers import ConvergenceError, SolverSettings, StepController, follow_load_path
 from wrinkle.solvers.base import Evaluation, SolverResult
+from wrinkle.solvers.stepping import _Increments
 
 
 class FakeProblem:
@@ -84,21 +85,44 @@ def test_cut_back_and_growth_sequence():
     assert solver.trials[:4] == [0.25, 0.125, 0.375, 0.25]
 
 
-def test_hard_steps_do_not_grow():
-    """A step taking more than target_iterations keeps its increment: after the first cut
-    (0.5 -> 0.25 under a limit of 0.3) every later step stays at 0.25."""
+def test_hard_steps_do_not_grow_without_regrowth():
+    """With regrow_after = 0 a step taking more than target_iterations keeps its increment:
+    after the first cut (0.5 -> 0.25 under a limit of 0.3) every later step stays at 0.25."""
     solver = FakeSolver(largest=0.3, iterations=9)
-    follow_load_path(FakeLevels(), solver, SolverSettings(steps=2, look_ahead=False).controller())
+    settings = SolverSettings(steps=2, look_ahead=False, regrow_after=0)
+    follow_load_path(FakeLevels(), solver, settings.controller())
     assert solver.trials == [0.5, 0.25, 0.5, 0.75, 1.0]
+
+
+def test_a_cut_increment_grows_back_after_two_steps_and_backs_off():
+    """Worked by hand, steps = 1, increments above 0.15 fail, every step takes 9 iterations
+    (not easy): 1, 0.5 and 0.25 fail; 0.125 and 0.25 converge at the cut increment 0.125, two
+    in a row, so it grows to 0.25, and 0.5 fails; now four in a row are needed (0.375, 0.5,
+    0.625, 0.75) before the next try at 0.25, to 1.0, fails; eight would be needed next, and
+    0.875 and 1.0 end the path."""
+    solver = FakeSolver(largest=0.15, iterations=9)
+    settings = SolverSettings(steps=1, look_ahead=False)
+    follow_load_path(FakeLevels(), solver, settings.controller())
+    assert settings.regrow_after == 2
+    assert solver.trials == [1.0, 0.5, 0.25, 0.125, 0.25, 0.5] + [
+        0.375,
+        0.5,
+        0.625,
+        0.75,
+        1.0,
+        0.875,
+        1.0,
+    ]
 
 
 def test_look_ahead_tries_the_end_before_cutting_back():
     """With the look-ahead (the default), the first failure above is followed by a try of the
     end of the path (1.0, which fails too, being an increment of 1 > 0.3), then the same
-    cut-backs as without it."""
+    cut-backs as without it: 0.25 and 0.5 at the cut increment, its regrowth to 0.5 failing
+    at 1.0, and 0.75 and 1.0."""
     solver = FakeSolver(largest=0.3, iterations=9)
     follow_load_path(FakeLevels(), solver, SolverSettings(steps=2).controller())
-    assert solver.trials == [0.5, 1.0, 0.25, 0.5, 0.75, 1.0]
+    assert solver.trials == [0.5, 1.0, 0.25, 0.5, 1.0, 0.75, 1.0]
 
 
 class HarderNearZero:
@@ -226,3 +250,21 @@ def test_a_path_under_pressure_that_reaches_no_level_names_the_remedy(case_file,
     assert ("bending = true" in str(caught.value)) == hint
     assert ("harder the smaller" in str(caught.value)) == hint
     assert caught.value.reached == 0.0
+
+
+def test_only_a_regrowth_whose_step_fails_doubles_the_steps_needed():
+    """steps = 4, every step 9 iterations (not easy): a cut 0.25 -> 0.125 grows back after
+    two steps in a row. If the step at the regrown 0.25 converges, a later failure needs two
+    in a row again; if that step fails, four."""
+    controller = SolverSettings(steps=4).controller()
+    for regrown_step_converges, needed in ((True, 2), (False, 4)):
+        increment = _Increments(controller)
+        assert increment.failed() and increment.value == 0.125
+        increment.converged(9)
+        assert increment.value == 0.125 and increment.in_a_row == 1
+        increment.converged(9)
+        assert increment.value == 0.25 and increment.in_a_row == 0
+        if regrown_step_converges:
+            increment.converged(9)
+        assert increment.failed() and increment.value == 0.125
+        assert increment.needed == needed

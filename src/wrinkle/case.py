@@ -110,6 +110,7 @@ SOLVER_KEYS = {
     "cutback",
     "growth",
     "target_iterations",
+    "regrow_after",
     "linear_solver",
     "look_ahead",
     "nested",
@@ -1241,10 +1242,9 @@ def _read_solver(reader: _Reader, table: dict, where: str = "[solver]") -> Solve
     for key in ("steps", "max_iterations"):
         if key in table:
             solver[key] = reader.number(table, key, where, integer=True, minimum=1)
-    if "target_iterations" in table:
-        solver["target_iterations"] = reader.number(
-            table, "target_iterations", where, integer=True, minimum=0
-        )
+    for key in ("target_iterations", "regrow_after"):
+        if key in table:
+            solver[key] = reader.number(table, key, where, integer=True, minimum=0)
     for key in (
         "tolerance",
         "min_step",

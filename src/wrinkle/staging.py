@@ -159,5 +159,17 @@ def restart_point(
     else:
         previous = (0.0, start_u)
     settings = steps[number - 1].settings.replace(**options)
-    increment = settings.controller().after_success(factor - previous[0], int(last["iterations"]))
-    return number - 1, start, Resume(factor, u, previous, increment)
+    factors = [0.0, *(float(saved[i]["load_factor"]) for i in same)]
+    increments = np.diff(factors)
+    in_a_row = 1  # the last saved steps at the last one's increment
+    while in_a_row < increments.size and np.isclose(
+        increments[-1 - in_a_row], increments[-1], rtol=1e-9, atol=0.0
+    ):
+        in_a_row += 1
+    last_increment = factor - previous[0]
+    increment = settings.controller().after_success(
+        last_increment, int(last["iterations"]), in_a_row
+    )
+    if increment != last_increment:
+        in_a_row = 0
+    return number - 1, start, Resume(factor, u, previous, increment, in_a_row)

@@ -207,6 +207,7 @@ def solve_to(
         cutback=settings.cutback,
         growth=settings.growth,
         target_iterations=settings.target_iterations,
+        regrow_after=settings.regrow_after,
         look_ahead=settings.look_ahead,
     )
     states: list[State] = []

@@ -87,8 +87,10 @@ class SolverSettings:
     (the first increment of the load factor is 1/steps), min_step, max_step (None: 1/steps),
     cutback (factor on the increment after a failed step), growth (factor after an easy
     step), target_iterations (a step converged in at most this many iterations is easy),
-    look_ahead (if the first step fails, solve the end of the path first and the levels below
-    it downwards, before cutting back); nested: start the first load step from the solution of
+    regrow_after (after a cut-back, this many steps in a row converged at the cut increment
+    let it grow whatever their iterations; 0: only easy steps do), look_ahead (if the first
+    step fails, solve the end of the path first and the levels below it downwards, before
+    cutting back); nested: start the first load step from the solution of
     coarser meshes (``Model.solve``'s ``coarse``; a case file makes them from ``[mesh]
     refine`` and ``[mesh] levels``): True, False, or "auto" (the default: on where coarser
     models are given; a case file gives them for ``[mesh] levels``, and for ``[mesh] refine``
@@ -119,6 +121,7 @@ class SolverSettings:
     cutback: float = 0.5
     growth: float = 2.0
     target_iterations: int = 6
+    regrow_after: int = 2
     look_ahead: bool = True
     nested: bool | str = "auto"
     convergence: str = "residual"
@@ -175,6 +178,11 @@ class SolverSettings:
             (
                 "target_iterations",
                 lambda: _is_integer(self.target_iterations, 0),
+                "an integer >= 0",
+            ),
+            (
+                "regrow_after",
+                lambda: _is_integer(self.regrow_after, 0),
                 "an integer >= 0",
             ),
             ("look_ahead", lambda: isinstance(self.look_ahead, bool), "true or false"),
@@ -286,5 +294,6 @@ class SolverSettings:
             cutback=self.cutback,
             growth=self.growth,
             target_iterations=self.target_iterations,
+            regrow_after=self.regrow_after,
             look_ahead=self.look_ahead,
         )

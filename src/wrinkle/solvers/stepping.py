@@ -103,6 +103,8 @@ class StepController:
     (a failure below it ends the path); max_step: the largest increment; cutback: factor on
     the increment after a failed step, in (0, 1); growth: factor on the increment after a
     step that converged in at most target_iterations iterations (an easy step), >= 1;
+    regrow_after: after a cut-back, this many steps in a row converged at the cut increment
+    let it grow by ``growth`` whatever their iterations (0: only easy steps do);
     look_ahead: if the first step fails, try the end of the path from the same start before
     cutting back, and reach the levels below it downwards (``follow_load_path``).
     """
@@ -113,6 +115,7 @@ class StepController:
     cutback: float = 0.5
     growth: float = 2.0
     target_iterations: int = 6
+    regrow_after: int = 2
     look_ahead: bool = True
 
     def first(self) -> float:
@@ -124,11 +127,56 @@ class StepController:
         smaller = increment * self.cutback
         return None if smaller < self.min_step else smaller
 
-    def after_success(self, increment: float, iterations: int) -> float:
-        """The next increment after a step that converged in ``iterations``."""
-        if iterations <= self.target_iterations and increment < self.max_step:
+    def after_success(
+        self, increment: float, iterations: int, in_a_row: int = 1, needed: int | None = None
+    ) -> float:
+        """The next increment after a step that converged in ``iterations``, the
+        ``in_a_row``-th converged in a row at this increment. A cut increment (below the
+        first) grows after ``needed`` such steps (default ``regrow_after``): the cut-back
+        answered the step that failed, and a creeping solve takes as many iterations at any
+        increment (the load reversed within one run: 23-88 per level at 1/32,
+        docs/notes/2026-12-hard-cases.md)."""
+        needed = self.regrow_after if needed is None else needed
+        easy = iterations <= self.target_iterations
+        cut = increment < self.first() * (1.0 - 1e-9)
+        regrow = 0 < needed <= in_a_row and cut
+        if (easy or regrow) and increment < self.max_step:
             return min(self.max_step, self.growth * increment)
         return increment
+
+
+class _Increments:
+    """A path's increment and what the controller's rules need to change it: the steps
+    converged in a row at it, and how many a cut increment needs before it grows again
+    (``regrow_after``, doubled each time a step at an increment so regrown fails, so that a
+    path that does need the cut increment loses at most a few failed steps to trying)."""
+
+    def __init__(self, controller: StepController, value: float | None = None, in_a_row: int = 0):
+        self.controller = controller
+        self.value = controller.first() if value is None else value
+        self.in_a_row = in_a_row
+        self.needed = controller.regrow_after
+        self._regrown = False
+
+    def failed(self) -> bool:
+        """Cut the increment back after a failed step; False if it would fall below
+        ``min_step`` (the increment is then unchanged)."""
+        smaller = self.controller.after_failure(self.value)
+        if smaller is None:
+            return False
+        if self._regrown:
+            self.needed *= 2
+        self.value, self.in_a_row, self._regrown = smaller, 0, False
+        return True
+
+    def converged(self, iterations: int) -> None:
+        """The increment after a step at it converged in ``iterations``."""
+        self._regrown = False  # a step at a regrown increment converged: it stands
+        self.in_a_row += 1
+        grown = self.controller.after_success(self.value, iterations, self.in_a_row, self.needed)
+        if grown != self.value:
+            self._regrown = iterations > self.controller.target_iterations
+            self.value, self.in_a_row = grown, 0
 
 
 def extrapolate(
@@ -235,19 +283,19 @@ def descend(
     factor, u, _ = top
     levels = [top]
     above: tuple[float, np.ndarray] | None = None
-    increment = controller.first()
-    while factor - increment > _END:
-        trial_factor = factor - increment
+    increment = _Increments(controller)
+    while factor - increment.value > _END:
+        trial_factor = factor - increment.value
         problem = _problem_at(system, trial_factor, timer)
         predicted = extrapolate(above, factor, u, trial_factor)
         try:
             solved = solve_step(problem, u, solver, predicted=predicted)
         except ConvergenceError:
-            smaller = controller.after_failure(increment)
-            if smaller is None:
+            if not increment.failed():
                 return None
-            increment = smaller
-            logger.info("step down to %.6g failed; increment cut to %.4g", trial_factor, increment)
+            logger.info(
+                "step down to %.6g failed; increment cut to %.4g", trial_factor, increment.value
+            )
             continue
         above = (factor, u)
         factor, u = trial_factor, solved.u
@@ -255,7 +303,7 @@ def descend(
             "load factor %.6g converged in %d iterations (downwards)", factor, solved.iterations
         )
         levels.append((factor, u, solved))
-        increment = controller.after_success(increment, solved.iterations)
+        increment.converged(solved.iterations)
     return levels[::-1]
 
 
@@ -429,12 +477,14 @@ class Resume:
     """Where a load path continues (``wrinkle run --restart``): the last converged state
     (load factor ``factor``, displacements ``u`` (n_dofs,)), the converged state before it
     (``previous``: load factor and displacements; (0, u at load factor 0) after the first
-    step), and the increment the path takes next."""
+    step), the increment the path takes next, and the steps converged in a row at it
+    (``StepController.after_success``)."""
 
     factor: float
     u: np.ndarray
     previous: tuple[float, np.ndarray]
     increment: float
+    in_a_row: int = 0
 
 
 def _under_pressure(system: LoadLevels) -> bool:
@@ -487,18 +537,19 @@ def follow_load_path(
     """
     u = np.zeros(system.n_dofs) if u0 is None else np.array(u0, dtype=float)
     slope = PathSlope(u)
-    increment = controller.first()
+    increment = _Increments(controller)
     factor = 0.0
     previous: tuple[float, np.ndarray] | None = None  # the converged state before the last
     looked_ahead = not controller.look_ahead
     if resume is not None:
         factor, u = resume.factor, np.array(resume.u, dtype=float)
-        previous, increment = resume.previous, resume.increment
+        previous = resume.previous
+        increment = _Increments(controller, resume.increment, resume.in_a_row)
         slope = PathSlope(previous[1], previous[0])
         slope.record(factor, u)
         looked_ahead = True
     while factor < 1.0 - _END:
-        trial_factor = min(1.0, factor + increment)
+        trial_factor = min(1.0, factor + increment.value)
         problem = _problem_at(system, trial_factor, timer)
         predicted = extrapolate(previous, factor, u, trial_factor)
         trusted, stop = False, None
@@ -524,11 +575,10 @@ def follow_load_path(
                         if on_step is not None:
                             on_step(*level)
                     return levels[-1][1]
-            smaller = controller.after_failure(increment)
-            if smaller is None:
+            if not increment.failed():
                 message = (
                     f"load step to factor {trial_factor:.6g} failed with increment "
-                    f"{increment:.3g} (minimum {controller.min_step:.3g}): {error}"
+                    f"{increment.value:.3g} (minimum {controller.min_step:.3g}): {error}"
                 )
                 if previous is None and _under_pressure(system):
                     message += f"; {SMALL_PRESSURE_HINT}"
@@ -552,8 +602,7 @@ def follow_load_path(
                 failure = ConvergenceError(message, error.history)
                 failure.reached = factor
                 raise failure from error
-            increment = smaller
-            logger.info("step to %.6g failed; increment cut to %.4g", trial_factor, increment)
+            logger.info("step to %.6g failed; increment cut to %.4g", trial_factor, increment.value)
             continue
         slope.record(trial_factor, solved.u)
         previous = (factor, u)
@@ -561,5 +610,5 @@ def follow_load_path(
         logger.info("load factor %.6g converged in %d iterations", factor, solved.iterations)
         if on_step is not None:
             on_step(factor, u, solved)
-        increment = controller.after_success(increment, solved.iterations)
+        increment.converged(solved.iterations)
     return u
