@@ -1,6 +1,7 @@
 """The hard cases of the load path (issue 18), with default settings, side by side with the
 same cases without the look-ahead of a failed first step (``[solver] look_ahead = false``,
-the path follower before it), in turns in one run.
+the path follower before it) or, with ``--compare regrow_after``, without the regrowth of cut
+increments (``[solver] regrow_after = 0``), in turns in one run.
 
 The cases (case files in benchmarks/hard_cases/ and examples/):
 - the quarter airbag of examples/airbag.toml from the flat sheet, at full pressure and ramped
@@ -22,6 +23,7 @@ writes it as CSV.
     python benchmarks/hard_cases.py                 # every case, both settings (~5 min)
     python benchmarks/hard_cases.py --only airbag --no-compare
     python benchmarks/hard_cases.py --rectangle 40 80 160 --fan 8 32 64
+    python benchmarks/hard_cases.py --compare regrow_after
 """
 
 from __future__ import annotations
@@ -181,12 +183,19 @@ def cases(args: argparse.Namespace) -> list[HardCase]:
     return runs
 
 
-def run(hard: HardCase, look_ahead: bool) -> dict[str, Any]:
+# what each case is run with besides the defaults (--compare): a label and [solver] keys
+COMPARED = {
+    "look_ahead": ("look_ahead = false", {"look_ahead": False}),
+    "regrow_after": ("regrow_after = 0", {"regrow_after": 0}),
+}
+
+
+def run(hard: HardCase, label: str = "default", solver: dict | None = None) -> dict[str, Any]:
     overrides = {
         key: dict(value) if isinstance(value, dict) else value
         for key, value in hard.overrides.items()
     }
-    overrides["solver"] = {**overrides.get("solver", {}), "look_ahead": look_ahead}
+    overrides["solver"] = {**overrides.get("solver", {}), **(solver or {})}
     case = read_case(hard.path, overrides=overrides)
     u0 = hard.start(case) if hard.start is not None else None
     start = time.perf_counter()
@@ -205,7 +214,7 @@ def run(hard: HardCase, look_ahead: bool) -> dict[str, Any]:
     return {
         "case": hard.name,
         "elements": case.model.mesh.n_elements,
-        "settings": "default" if look_ahead else "look_ahead = false",
+        "settings": label,
         "converged": "yes" if converged else "NO",
         "levels": len(results.steps),
         "iterations": sum(step.iterations for step in results.steps),
@@ -223,12 +232,19 @@ def main() -> None:
     parser.add_argument("--slack", type=int, nargs="+", default=[8, 32])
     parser.add_argument("--only", nargs="+", help="cases whose name contains one of these")
     parser.add_argument("--no-compare", action="store_true", help="default settings only")
+    parser.add_argument(
+        "--compare",
+        choices=list(COMPARED),
+        default="look_ahead",
+        help="the setting each case is also run without, in turn with the defaults",
+    )
     parser.add_argument("--csv", default="hard_cases.csv")
     args = parser.parse_args()
+    settings = [("default", {})] + ([] if args.no_compare else [COMPARED[args.compare]])
     rows = []
     for hard in cases(args):
-        for look_ahead in (True,) if args.no_compare else (True, False):
-            row = run(hard, look_ahead)
+        for label, solver in settings:
+            row = run(hard, label, solver)
             rows.append(row)
             print(" | ".join(str(row[name]) for name in FIELDS), flush=True)
     print()

@@ -12,6 +12,7 @@ pressure).
 
     python benchmarks/limit_point_sweep.py --n 8
     python benchmarks/limit_point_sweep.py --n 8 --control arc-length
+    python benchmarks/limit_point_sweep.py --n 8 --regrow-after 0   # the controller before
 """
 
 from __future__ import annotations
@@ -35,7 +36,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=8, help="the octant's subdivisions")
     parser.add_argument("--control", choices=("load", "arc-length"), default="load")
+    parser.add_argument(
+        "--regrow-after",
+        type=int,
+        help="[solver] regrow_after (default the solver's, 2; 0: cut increments grow back only "
+        "after easy steps, as before 4 December 2026)",
+    )
     args = parser.parse_args()
+    solver: dict = {} if args.regrow_after is None else {"regrow_after": args.regrow_after}
     reference = InflatedSphere(radius=0.1, thickness=1e-3, mu=4e5)
     print("steps | p / p_max | outcome | stretch | closed form | limit pressure | s")
     for steps in (1, 20):
@@ -45,7 +53,7 @@ def main() -> None:
                 {
                     "mesh": {"sphere": {"radius": 0.1, "n": args.n}},
                     "load": [{"kind": "pressure", "value": float(pressure)}],
-                    "solver": {"steps": steps, "control": args.control},
+                    "solver": {"steps": steps, "control": args.control, **solver},
                 },
             )
             facets = effective_radius(case.model.mesh) / 0.1

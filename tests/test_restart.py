@@ -50,8 +50,13 @@ def test_a_restarted_run_has_the_uninterrupted_runs_steps(shear, tmp_path):
     interrupted(read_case(shear), tmp_path / "again", after=7)
     stopped = wrinkle.open_results(tmp_path / "again")
     assert len(stopped) == 7 and not stopped.summary["converged"]
+    saved = stopped.summary["steps"][-1]["controller"]  # what the restart goes on from
+    assert saved == {"increment": pytest.approx(0.05), "in_a_row": 7, "needed": 2, "regrown": False}
     assert main(["run", str(shear), "--out", str(tmp_path / "again"), "--restart", "-q"]) == 0
     full, again = (wrinkle.open_results(tmp_path / name) for name in ("full", "again"))
+    assert [s["controller"] for s in again.summary["steps"]] == [
+        s["controller"] for s in full.summary["steps"]
+    ]
     np.testing.assert_array_equal(again.load_factors, full.load_factors)
     scale = np.abs(full.displacement()).max()
     for step in range(20):

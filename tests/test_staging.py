@@ -412,9 +412,10 @@ def test_pressures_that_cancel_are_reported_as_zero_with_their_volume():
     ],
 )
 def test_a_restart_counts_the_steps_in_a_row_at_the_last_increment(factors, increment, in_a_row):
-    """``restart_point`` rebuilds the step controller's state from the saved levels: the
-    increment of the last, how many before it had the same one, and the growth that the
-    uninterrupted run would have made (steps = 4, every step 9 iterations: not easy)."""
+    """``restart_point`` takes the step controller's state that the summary saved with the
+    last step; for a folder without it, it rebuilds it from the saved levels: the increment
+    of the last, how many before it had the same one, and the growth that the uninterrupted
+    run would have made (steps = 4, every step 9 iterations: not easy)."""
     model = roof(wrinkle.rectangle(10.0, 10.0, 4, 4))
     steps = [
         AnalysisStep(
@@ -427,5 +428,10 @@ def test_a_restart_counts_the_steps_in_a_row_at_the_last_increment(factors, incr
     _, _, resume = restart_point(model, steps, saved, lambda i: np.zeros(model.n_dofs))
     assert resume is not None
     assert resume.factor == factors[-1] and resume.previous[0] == (factors[-2])
-    assert resume.increment == pytest.approx(increment)
-    assert resume.in_a_row == in_a_row
+    assert resume.controller["increment"] == pytest.approx(increment)
+    assert resume.controller["in_a_row"] == in_a_row
+    # a folder that holds the controller's state: taken as it is
+    state = {"increment": 0.125, "in_a_row": 1, "needed": 4, "regrown": False}
+    saved[-1]["controller"] = state
+    _, _, resume = restart_point(model, steps, saved, lambda i: np.zeros(model.n_dofs))
+    assert resume is not None and resume.controller == state

@@ -268,3 +268,29 @@ def test_only_a_regrowth_whose_step_fails_doubles_the_steps_needed():
             increment.converged(9)
         assert increment.failed() and increment.value == 0.125
         assert increment.needed == needed
+
+
+def test_a_path_resumed_from_any_level_goes_on_as_the_uninterrupted_one():
+    """The hand-worked path of ``test_a_cut_increment_grows_back_after_two_steps_and_backs_off``
+    (cut-backs, regrowths, a failed regrowth and its doubling) resumed after each of its
+    levels from the controller's state saved with that level (``path_state``, the summary's
+    "controller") tries the same load factors as the uninterrupted path from there on."""
+    from wrinkle.solvers.stepping import Resume
+
+    controller = SolverSettings(steps=1, look_ahead=False).controller()
+    solver = FakeSolver(largest=0.15, iterations=9)
+    levels = []
+    follow_load_path(
+        FakeLevels(),
+        solver,
+        controller,
+        on_step=lambda f, u, s: levels.append((round(f, 12), len(solver.trials), s.path_state)),
+    )
+    full = solver.trials
+    for k in range(1, len(levels) - 1):
+        factor, tried, state = levels[k]
+        resumed = FakeSolver(largest=0.15, iterations=9)
+        resumed.reached = factor
+        resume = Resume(factor, np.zeros(3), (levels[k - 1][0], np.zeros(3)), state)
+        follow_load_path(FakeLevels(), resumed, controller, resume=resume)
+        assert resumed.trials == full[tried:], factor

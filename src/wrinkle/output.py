@@ -31,7 +31,9 @@
   norm of each iteration of the step's solve), "stopped_by" ("residual" or
   "accuracy"), and for "accuracy" "accuracy_stop": {"residual" (relative to the force scale),
   "energy_gap", "discretisation_error", "contraction", "remaining_change": {quantity:
-  value}} (``wrinkle.solvers.stopping``), and "pressure" where the model has pressure loads
+  value}} (``wrinkle.solvers.stopping``), "controller" where a load path solved the step:
+  the step controller's state after it, {"increment" (the next), "in_a_row", "needed",
+  "regrown"}, which ``--restart`` continues from, and "pressure" where the model has pressure loads
   and "enclosed_volume" where they enclose a volume (``StepResult``), "strain_energy",
   "external_work" (trapezoidal rule over the steps, ``ResultWriter._quantities``), "areas"
   {"taut", "wrinkled", "slack"} (current), "max_principal_stress" {"value", "element",
@@ -403,6 +405,9 @@ class ResultWriter:
         stop = getattr(step, "stop_report", None)
         if stop is not None:
             entry["accuracy_stop"] = {key: value for key, value in stop.items() if key != "rule"}
+        controller = getattr(step, "controller", None)
+        if controller is not None:
+            entry["controller"] = dict(controller)
         extra: list[float | None] = []
         for name, present in (
             ("pressure", self.has_pressure),

@@ -38,7 +38,8 @@ class StepResult:
     each iteration of the step's converged solve, the first at its start; analysis_step: the
     number of the analysis step (``[[step]]``, from 1) whose path the load factor is on;
     pressure_factor: the factor on its pressures (the load factor but under volume control
-    and gas loads).
+    and gas loads); controller: the step controller's state after it, where a load path
+    solved it (``SolverResult.path_state``), which a restart continues from.
     """
 
     load_factor: float
@@ -54,6 +55,7 @@ class StepResult:
     residual_history: tuple[float, ...] = ()
     analysis_step: int = 1
     pressure_factor: float | None = None
+    controller: dict[str, Any] | None = None
 
     @property
     def time(self) -> float:
@@ -140,6 +142,7 @@ class Results:
             tuple(float(r) for r in solved.residual_norms),
             self.analysis_step,
             factor,
+            getattr(solved, "path_state", None),
         )
         self.steps.append(step)
         return step

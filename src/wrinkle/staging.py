@@ -28,7 +28,7 @@ from wrinkle.results import Results, StepResult
 from wrinkle.solvers.base import ConvergenceError
 from wrinkle.solvers.control import PathEnd
 from wrinkle.solvers.settings import SolverSettings
-from wrinkle.solvers.stepping import Resume
+from wrinkle.solvers.stepping import Resume, StepController
 from wrinkle.system import LoadState, StepStart
 
 if TYPE_CHECKING:
@@ -159,17 +159,25 @@ def restart_point(
     else:
         previous = (0.0, start_u)
     settings = steps[number - 1].settings.replace(**options)
-    factors = [0.0, *(float(saved[i]["load_factor"]) for i in same)]
-    increments = np.diff(factors)
-    in_a_row = 1  # the last saved steps at the last one's increment
+    controller = last.get("controller")
+    if controller is None:  # a folder written before the state was saved
+        controller = saved_controller(settings.controller(), [saved[i] for i in same])
+    return number - 1, start, Resume(factor, u, previous, controller)
+
+
+def saved_controller(
+    controller: StepController, levels: Sequence[Mapping[str, Any]]
+) -> dict[str, Any]:
+    """The step controller's state after the last of a path's converged ``levels`` (each
+    with "load_factor" and "iterations"), for a folder that does not hold it: the last
+    increment grown by ``after_success``, counting the levels before it at the same
+    increment as steps in a row (a failed step between them cannot be seen)."""
+    increments = np.diff([0.0, *(float(level["load_factor"]) for level in levels)])
+    in_a_row = 1
     while in_a_row < increments.size and np.isclose(
         increments[-1 - in_a_row], increments[-1], rtol=1e-9, atol=0.0
     ):
         in_a_row += 1
-    last_increment = factor - previous[0]
-    increment = settings.controller().after_success(
-        last_increment, int(last["iterations"]), in_a_row
-    )
-    if increment != last_increment:
-        in_a_row = 0
-    return number - 1, start, Resume(factor, u, previous, increment, in_a_row)
+    last = float(increments[-1])
+    increment = controller.after_success(last, int(levels[-1]["iterations"]), in_a_row)
+    return {"increment": increment, "in_a_row": 0 if increment != last else in_a_row}

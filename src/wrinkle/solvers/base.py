@@ -161,7 +161,9 @@ class StopRule(Protocol):
 class SolverResult:
     """A converged solve: displacements (n_dofs,), iteration count, residual history, the
     last evaluation, which test ended it (``stopped_by``: "residual", or "accuracy" with
-    ``stop_report`` the numbers the stop rule decided on)."""
+    ``stop_report`` the numbers the stop rule decided on); ``path_state``: where a load path
+    solved it, the step controller's state after it (``stepping._Increments.state``), which a
+    restart continues from."""
 
     u: np.ndarray
     iterations: int
@@ -169,6 +171,7 @@ class SolverResult:
     evaluation: Evaluation  # at u
     stopped_by: str = "residual"
     stop_report: dict[str, Any] | None = None
+    path_state: dict[str, Any] | None = None
 
 
 class ConvergenceError(RuntimeError):

@@ -17,9 +17,9 @@ the problem harder, not easier. The other path followers, arc length
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -128,11 +128,12 @@ class StepController:
         return None if smaller < self.min_step else smaller
 
     def after_success(
-        self, increment: float, iterations: int, in_a_row: int = 1, needed: int | None = None
+        self, increment: float, iterations: int, in_a_row: int = 0, needed: int | None = None
     ) -> float:
         """The next increment after a step that converged in ``iterations``, the
-        ``in_a_row``-th converged in a row at this increment. A cut increment (below the
-        first) grows after ``needed`` such steps (default ``regrow_after``): the cut-back
+        ``in_a_row``-th converged in a row at this increment (0: not counted, as volume
+        control does not). A cut increment (below the first) grows after ``needed`` such
+        steps (default ``regrow_after``): the cut-back
         answered the step that failed, and a creeping solve takes as many iterations at any
         increment (the load reversed within one run: 23-88 per level at 1/32,
         docs/notes/2026-12-hard-cases.md)."""
@@ -151,12 +152,28 @@ class _Increments:
     (``regrow_after``, doubled each time a step at an increment so regrown fails, so that a
     path that does need the cut increment loses at most a few failed steps to trying)."""
 
-    def __init__(self, controller: StepController, value: float | None = None, in_a_row: int = 0):
+    def __init__(self, controller: StepController, state: Mapping[str, Any] | None = None):
+        """The increments of a path from its start, or from ``state`` (``state``)."""
         self.controller = controller
-        self.value = controller.first() if value is None else value
-        self.in_a_row = in_a_row
+        self.value = controller.first()
+        self.in_a_row = 0
         self.needed = controller.regrow_after
         self._regrown = False
+        if state is not None:
+            self.value = float(state["increment"])
+            self.in_a_row = int(state.get("in_a_row", 0))
+            self.needed = int(state.get("needed", controller.regrow_after))
+            self._regrown = bool(state.get("regrown", False))
+
+    def state(self) -> dict[str, Any]:
+        """What a restart needs to go on as this path would: {"increment", "in_a_row",
+        "needed", "regrown"} (the summary's "controller" of each step)."""
+        return {
+            "increment": self.value,
+            "in_a_row": self.in_a_row,
+            "needed": self.needed,
+            "regrown": self._regrown,
+        }
 
     def failed(self) -> bool:
         """Cut the increment back after a failed step; False if it would fall below
@@ -477,14 +494,13 @@ class Resume:
     """Where a load path continues (``wrinkle run --restart``): the last converged state
     (load factor ``factor``, displacements ``u`` (n_dofs,)), the converged state before it
     (``previous``: load factor and displacements; (0, u at load factor 0) after the first
-    step), the increment the path takes next, and the steps converged in a row at it
-    (``StepController.after_success``)."""
+    step), and the step controller's state (``_Increments.state``: the increment the path
+    takes next, the steps converged in a row at it, ...)."""
 
     factor: float
     u: np.ndarray
     previous: tuple[float, np.ndarray]
-    increment: float
-    in_a_row: int = 0
+    controller: Mapping[str, Any]
 
 
 def _under_pressure(system: LoadLevels) -> bool:
@@ -544,7 +560,7 @@ def follow_load_path(
     if resume is not None:
         factor, u = resume.factor, np.array(resume.u, dtype=float)
         previous = resume.previous
-        increment = _Increments(controller, resume.increment, resume.in_a_row)
+        increment = _Increments(controller, resume.controller)
         slope = PathSlope(previous[1], previous[0])
         slope.record(factor, u)
         looked_ahead = True
@@ -608,7 +624,8 @@ def follow_load_path(
         previous = (factor, u)
         factor, u = trial_factor, solved.u
         logger.info("load factor %.6g converged in %d iterations", factor, solved.iterations)
+        increment.converged(solved.iterations)
+        solved.path_state = increment.state()
         if on_step is not None:
             on_step(factor, u, solved)
-        increment.converged(solved.iterations)
     return u
