@@ -153,7 +153,7 @@ class _Increments:
     path that does need the cut increment loses at most a few failed steps to trying)."""
 
     def __init__(self, controller: StepController, state: Mapping[str, Any] | None = None):
-        """The increments of a path from its start, or from ``state`` (``state``)."""
+        """The increments of a path from its start, or from a state that ``state`` gave."""
         self.controller = controller
         self.value = controller.first()
         self.in_a_row = 0
