@@ -306,3 +306,19 @@ def test_version_and_python_dash_m(capsys):
             main([removed])
         assert stop.value.code == 2
     capsys.readouterr()
+
+
+def test_a_run_with_no_converged_step_says_so(tmp_path, capsys):
+    """The airbag (8 x 8) with 2 Newton iterations a step converges at no load level: exit
+    status 1, the reason, and that the folder holds no step (not "the converged steps are
+    in")."""
+    airbag = Path(__file__).resolve().parents[1] / "examples" / "airbag.toml"
+    text = airbag.read_text().replace("nx = 32, ny = 32", "nx = 8, ny = 8")
+    text = text.replace("[solver]\n", "[solver]\nmax_iterations = 2\nmin_step = 0.3\n")
+    assert "nx = 8, ny = 8" in text and "max_iterations = 2" in text
+    case = tmp_path / "airbag.toml"
+    case.write_text(text)
+    code = main(["run", str(case), "--out", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 1 and "not converged" in err
+    assert "no load step converged" in err and "the converged steps are in" not in err

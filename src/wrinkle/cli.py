@@ -71,7 +71,11 @@ def _run(args: argparse.Namespace) -> int:
     except ConvergenceError as error:
         progress.close()
         print(f"wrinkle: {args.case}: not converged: {error}", file=sys.stderr)
-        print(f"wrinkle: the converged steps are in {args.out}", file=sys.stderr)
+        results = getattr(error, "results", None)
+        if results is not None and not results.steps:
+            print(f"wrinkle: no load step converged; {args.out} holds no step", file=sys.stderr)
+        else:
+            print(f"wrinkle: the converged steps are in {args.out}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         progress.close()
