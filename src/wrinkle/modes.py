@@ -30,7 +30,6 @@ a wrinkled sheet) are reported as negative frequencies, f = -sqrt(-lambda) / 2 p
 
 from __future__ import annotations
 
-import contextlib
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -44,6 +43,7 @@ from wrinkle.assembly import SparsityPattern
 from wrinkle.element import KERNEL_BLOCK
 from wrinkle.solvers.linear import SymmetryCheck, make_linear_solver
 from wrinkle.solvers.stability import UNSTABLE
+from wrinkle.threads import blas_threads
 
 if TYPE_CHECKING:
     from wrinkle.model import Model
@@ -122,18 +122,6 @@ def mass_matrix(
     if kind == "lumped":
         return sp.diags(lumped_mass(pattern, area, mass_per_area)).tocsr()
     raise ValueError(f"unknown mass '{kind}' (one of {', '.join(MASS_KINDS)})")
-
-
-def blas_threads(limit: int | None) -> contextlib.AbstractContextManager:
-    """A context in which OpenBLAS uses at most ``limit`` threads (threadpoolctl); nothing
-    for limit None or without threadpoolctl."""
-    if limit is None:
-        return contextlib.nullcontext()
-    try:
-        from threadpoolctl import threadpool_limits  # type: ignore[import-untyped, import-not-found, unused-ignore]
-    except ImportError:
-        return contextlib.nullcontext()
-    return threadpool_limits(limits={"libscipy_openblas": limit})  # NumPy's and SciPy's
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,7 @@ from wrinkle.solvers.linear import (
     diagonal_positions,
     make_linear_solver,
 )
+from wrinkle.threads import blas_threads
 from wrinkle.timing import LINEAR, Stopwatch
 
 __all__ = [
@@ -322,6 +323,9 @@ class RegularisedSolver(ABC):
     #: factorise the free block of a matrix whose constrained rows and columns hold only
     #: their diagonal (``FreeBlock``; False: the whole matrix, as before 4 December 2026)
     free_block = True
+    #: OpenBLAS threads during a solve (``wrinkle.threads``; None: as many as it starts,
+    #: before the parallel kernels of 4 December 2026)
+    blas_threads: int | None = 1
 
     def __init__(
         self,
@@ -482,7 +486,18 @@ class RegularisedSolver(ABC):
         at_start: problem's evaluation at u0 if the caller has it, with or without stiffness;
         a start already in balance then costs no evaluation of the stiffness. stop: a rule
         that may end the solve before the residual test (``StopRule``), asked after each
-        accepted iteration."""
+        accepted iteration. OpenBLAS runs on ``blas_threads`` threads meanwhile."""
+        with blas_threads(self.blas_threads):
+            return self._solve(problem, u0, at_start, stop)
+
+    def _solve(
+        self,
+        problem: Problem,
+        u0: np.ndarray,
+        at_start: Evaluation | None,
+        stop: StopRule | None,
+    ) -> SolverResult:
+        """``solve``."""
         self.time_with(problem)
         u = np.array(u0, dtype=float)
         if at_start is not None and is_converged(at_start, self.tolerance):

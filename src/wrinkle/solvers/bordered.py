@@ -52,6 +52,7 @@ from wrinkle.solvers.base import (
 )
 from wrinkle.solvers.newton import RegularisedNewton
 from wrinkle.solvers.stepping import SteppedProblem
+from wrinkle.threads import blas_threads
 
 __all__ = [
     "BorderedResult",
@@ -199,7 +200,21 @@ def solve_bordered(
     ``ResidualMerit``; a merit with a potential, such as the Lagrangian of volume
     control, finds the inflated shape from a flat sheet where the residual cannot). Raises
     ConvergenceError if it fails, InadmissibleState if it balances in a state that is not
-    physical."""
+    physical. OpenBLAS runs on ``solver.blas_threads`` threads meanwhile."""
+    with blas_threads(solver.blas_threads):
+        return _solve_bordered(family, constraint, u0, mu0, solver, timer_owner, merit)
+
+
+def _solve_bordered(
+    family: Family,
+    constraint: Constraint,
+    u0: np.ndarray,
+    mu0: float,
+    solver: RegularisedNewton,
+    timer_owner: Callable[[SteppedProblem], None] | None,
+    merit: Merit | None,
+) -> BorderedResult:
+    """``solve_bordered``."""
 
     def problem_at(mu: float) -> SteppedProblem:
         problem = family.at(mu)
