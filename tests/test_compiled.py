@@ -19,7 +19,7 @@ from wrinkle.case import read_case
 from wrinkle.element import element_stiffness, nodal_forces, strain_displacement
 from wrinkle.loads import pressure_forces, subtract_pressure_stiffness
 from wrinkle.materials import StVenantKirchhoff
-from wrinkle.wrinkling import Wrinkling
+from wrinkle.wrinkling import Wrinkling, WrinklingError
 
 needs_numba = pytest.mark.skipif(not compiled.installed(), reason="numba not installed")
 AIRBAG = Path(__file__).resolve().parents[1] / "examples" / "airbag.toml"
@@ -145,3 +145,106 @@ def test_wrinkled_tangent_equals_numpy_formula():
     np.testing.assert_array_equal(
         compiled.wrinkled_tangent(*arguments), wrinkling._wrinkled_tangent(*arguments)
     )
+
+
+def svk_batch(m: int, seed: int = 0) -> np.ndarray:
+    """Right Cauchy-Green tensors C (m, 2, 2) of taut, wrinkled and slack elements: random
+    deformations, some at round-off from the reference, some crushed across, one not finite."""
+    rng = np.random.default_rng(seed)
+    F = np.eye(3, 2)[None] + 0.3 * rng.standard_normal((m, 3, 2))
+    F[: m // 10] = np.eye(3, 2)[None] + 1e-9 * rng.standard_normal((m // 10, 3, 2))
+    F[m // 10 : m // 5, :, 1] *= 0.01
+    C = np.einsum("nia,nib->nab", F, F)
+    C[-1] = np.nan
+    return C
+
+
+SVK_LAWS = {
+    "isotropic": StVenantKirchhoff.isotropic(E=588e6, nu=0.4, thickness=6e-4),
+    "transversely isotropic": StVenantKirchhoff.transversely_isotropic(
+        E_L=3e9, E_T=1e9, nu_LT=0.3, nu_TT=0.4, G_LT=0.5e9, thickness=1e-4
+    ),
+}
+RESPONSE_FIELDS = ("stress", "tangent", "thickness", "wrinkle_angle", "wrinkle_parameter", "energy")
+
+
+@needs_numba
+@pytest.mark.parametrize("law", list(SVK_LAWS))
+@pytest.mark.parametrize("tangent", [True, False])
+def test_svk_response_kernel_equals_numpy(law, tangent):
+    """The whole St Venant-Kirchhoff response by one kernel (``compiled.svk_wrinkling``) gives
+    the NumPy code's states, and its stresses, tangents, thicknesses, wrinkle angles and
+    parameters and energies to round-off, on all three states and a non-finite C."""
+    wrinkling = Wrinkling(SVK_LAWS[law])
+    C = svk_batch(4000)
+    expected = wrinkling.response(C, tangent=tangent)
+    result = wrinkling.response(C, tangent=tangent, compiled=True)
+    np.testing.assert_array_equal(result.state, expected.state)
+    assert np.all(np.bincount(expected.state[:-1]) > 100)  # taut, wrinkled and slack
+    for name in RESPONSE_FIELDS:
+        got, want = getattr(result, name), getattr(expected, name)
+        if not tangent and name == "tangent":
+            assert got is None and want is None
+            continue
+        finite = np.isfinite(want)
+        np.testing.assert_array_equal(np.isfinite(got), finite, err_msg=name)
+        scale = np.abs(want[finite]).max()
+        np.testing.assert_allclose(
+            got[finite], want[finite], rtol=0, atol=1e-14 * scale, err_msg=name
+        )
+
+
+@needs_numba
+def test_svk_kernel_leaves_unsolved_elements_to_numpy(monkeypatch):
+    """An element whose Newton iterations do not converge in the kernel (here: none are
+    allowed) is flagged and solved by the NumPy code, with its angle search: the wrinkled
+    elements then equal the NumPy response bit for bit."""
+    wrinkling = Wrinkling(SVK_LAWS["isotropic"])
+    C = svk_batch(1000, seed=1)
+    law = wrinkling._linear_law
+    assert law is not None
+    *_, fallback = compiled.svk_wrinkling(C, law, 1e-13, 0.0, 1.0, 1e3, 0, True)
+    expected = wrinkling.response(C)
+    np.testing.assert_array_equal(fallback, expected.state == 1)
+    kernel = compiled.svk_wrinkling
+    monkeypatch.setattr(
+        compiled, "svk_wrinkling", lambda C, law, *a: kernel(C, law, *a[:4], 0, a[5])
+    )
+    result = wrinkling.response(C, compiled=True)
+    wrinkled = expected.state == 1
+    for name in RESPONSE_FIELDS:
+        np.testing.assert_array_equal(
+            getattr(result, name)[wrinkled], getattr(expected, name)[wrinkled], err_msg=name
+        )
+
+
+@needs_numba
+def test_svk_kernel_failure_names_the_elements_of_the_batch(monkeypatch):
+    """A WrinklingError of the NumPy code on the elements the kernel left names them by
+    their rows in the whole batch."""
+    wrinkling = Wrinkling(SVK_LAWS["isotropic"])
+    C = svk_batch(500, seed=2)
+    kernel = compiled.svk_wrinkling
+    monkeypatch.setattr(
+        compiled, "svk_wrinkling", lambda C, law, *a: kernel(C, law, *a[:4], 0, a[5])
+    )
+
+    def fail(self, C, plain_stress, plain_tangent=None):
+        raise WrinklingError(np.array([1, 2]))
+
+    wrinkled = np.flatnonzero(wrinkling.response(C).state == 1)
+    monkeypatch.setattr(Wrinkling, "_solve_conditions", fail)
+    with pytest.raises(WrinklingError) as error:
+        wrinkling.response(C, compiled=True)
+    np.testing.assert_array_equal(error.value.elements, wrinkled[[1, 2]])
+
+
+def test_only_a_plain_svk_law_has_its_response_compiled():
+    """A prestressed St Venant-Kirchhoff law (its own stress-free state) and any other law
+    keep the NumPy response with the compiled wrinkled tangent."""
+    from wrinkle.materials import NeoHookean, Prestressed
+
+    svk = SVK_LAWS["isotropic"]
+    assert Wrinkling(svk)._linear_law is not None
+    assert Wrinkling(Prestressed(svk, [1e3, 1e3, 0.0]))._linear_law is None
+    assert Wrinkling(NeoHookean(mu=1e6, thickness=1e-3))._linear_law is None

@@ -1,9 +1,17 @@
 """Compiled (Numba) versions of the hottest loops of an iteration, used when Numba is
 installed (extra ``fast``); NumPy versions of the same formulas are the fallback.
 
+- ``svk_wrinkling``: the whole relaxed response of a St Venant-Kirchhoff law
+  (``wrinkle.wrinkling.Wrinkling.response``: the states, the wrinkling conditions solved by
+  Newton's method from the same first guess, the tests of the solution, the modified state's
+  stress, thickness, energy and consistent tangent), one element at a time in parallel. The
+  rare element it does not resolve is left to the NumPy code, with its angle search and
+  ``_refine``. Measured in a solve by ``benchmarks/rectangle_speed.py`` (docs/performance.md,
+  "OpenBLAS's threads").
 - ``element_stiffness``: A0 (B^T D B + G (x) I3) of a block of triangles, the formula of
   ``wrinkle.element.element_stiffness`` (B of ``strain_displacement``), one element at a time,
-  so that B and D B stay in registers instead of (m, 3, 9) temporaries.
+  so that B and D B stay in registers instead of (m, 3, 9) temporaries; in parallel over
+  chunks of 256 elements.
 - ``subtract_pressure_stiffness``: the follower pressure's load stiffness taken from the
   element matrices, the loop of ``wrinkle.loads.subtract_pressure_stiffness`` (54 entries per
   element) in one pass over them instead of 54 strided ones: 0.9 -> 0.13 ms per block of
@@ -26,9 +34,15 @@ them stays NumPy), block-wise assembly 0.035 -> 0.009 s / 0.27 -> 0.10 s; the la
 ``benchmarks/element_evaluation.py`` on the 10^5-element airbag. All give the NumPy results
 to round-off (the last four bit for bit: same operations in the same order).
 
-Numba is imported, and the kernels compiled (about 1 s, then cached on disk, ``cache=True``),
-at their first use, and they are used from MIN_ELEMENTS elements on, where they save more than
-that; WRINKLE_NUMBA=1 in the environment uses them on every mesh, WRINKLE_NUMBA=0 on none.
+``svk_wrinkling`` and ``element_stiffness`` run on all of Numba's threads (one a core, or
+``NUMBA_NUM_THREADS``), the others on one. The parallel loops gain only where nothing else
+keeps the cores busy: during a solve, OpenBLAS's idle threads are kept from spinning
+(``wrinkle.threads``).
+
+Numba is imported, and the kernels compiled (a few seconds, then cached on disk,
+``cache=True``), at their first use, and they are used from MIN_ELEMENTS elements on, where
+they save more than that; WRINKLE_NUMBA=1 in the environment uses them on every mesh,
+WRINKLE_NUMBA=0 on none.
 """
 
 from __future__ import annotations
@@ -37,6 +51,7 @@ import functools
 import importlib.util
 import os
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -49,9 +64,16 @@ __all__ = [
     "nodal_forces",
     "scatter_add",
     "subtract_pressure_stiffness",
+    "svk_wrinkling",
 ]
 
 MIN_ELEMENTS = 10_000
+# elements per task of the kernels that run in parallel over chunks
+_CHUNK = 256
+
+# numba.prange once the kernels are compiled (``_compiled``); the loops over elements that
+# use it run on all of Numba's threads
+prange = range
 
 
 @functools.cache
@@ -70,36 +92,44 @@ def enabled(n_elements: int) -> bool:
 
 
 def _element_stiffness(area, F, shape_gradient, tangent, stress, out):
-    """out[e] = A0 (B^T D B + G (x) I3) for each element e; shapes as ``element_stiffness``."""
-    B = np.empty((3, 9))
-    DB = np.empty((3, 9))
-    for e in range(area.shape[0]):
-        a = area[e]
-        for k in range(3):  # B of wrinkle.element.strain_displacement
-            g0, g1 = shape_gradient[e, k, 0], shape_gradient[e, k, 1]
+    """out[e] = A0 (B^T D B + G (x) I3) for each element e; shapes as ``element_stiffness``.
+    In parallel over chunks of _CHUNK elements, each with its own B and D B."""
+    n = area.shape[0]
+    for chunk in prange((n + _CHUNK - 1) // _CHUNK):
+        B = np.empty((3, 9))
+        DB = np.empty((3, 9))
+        for e in range(chunk * _CHUNK, min(n, (chunk + 1) * _CHUNK)):
+            _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, out)
+
+
+def _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, out):
+    """out[e] of ``_element_stiffness``, with B and DB (3, 9) as scratch."""
+    a = area[e]
+    for k in range(3):  # B of wrinkle.element.strain_displacement
+        g0, g1 = shape_gradient[e, k, 0], shape_gradient[e, k, 1]
+        for i in range(3):
+            F0, F1 = F[e, i, 0], F[e, i, 1]
+            B[0, 3 * k + i] = g0 * F0
+            B[1, 3 * k + i] = g1 * F1
+            B[2, 3 * k + i] = g1 * F0 + g0 * F1
+    # the row's factors are read into scalars first: the compiler then keeps them in
+    # registers over the loop on c (twice as fast as indexing B and D inside it)
+    for r in range(3):  # A0 D B
+        t0, t1, t2 = tangent[e, r, 0], tangent[e, r, 1], tangent[e, r, 2]
+        for c in range(9):
+            DB[r, c] = a * (t0 * B[0, c] + t1 * B[1, c] + t2 * B[2, c])
+    for r in range(9):
+        b0, b1, b2 = B[0, r], B[1, r], B[2, r]
+        for c in range(9):
+            out[e, r, c] = b0 * DB[0, c] + b1 * DB[1, c] + b2 * DB[2, c]
+    N00, N11, N01 = a * stress[e, 0, 0], a * stress[e, 1, 1], a * stress[e, 0, 1]
+    for k in range(3):  # geometric part, G_kl = grad psi_k . A0 N grad psi_l
+        v0 = N00 * shape_gradient[e, k, 0] + N01 * shape_gradient[e, k, 1]
+        v1 = N01 * shape_gradient[e, k, 0] + N11 * shape_gradient[e, k, 1]
+        for m in range(3):
+            G = shape_gradient[e, m, 0] * v0 + shape_gradient[e, m, 1] * v1
             for i in range(3):
-                F0, F1 = F[e, i, 0], F[e, i, 1]
-                B[0, 3 * k + i] = g0 * F0
-                B[1, 3 * k + i] = g1 * F1
-                B[2, 3 * k + i] = g1 * F0 + g0 * F1
-        # the row's factors are read into scalars first: the compiler then keeps them in
-        # registers over the loop on c (twice as fast as indexing B and D inside it)
-        for r in range(3):  # A0 D B
-            t0, t1, t2 = tangent[e, r, 0], tangent[e, r, 1], tangent[e, r, 2]
-            for c in range(9):
-                DB[r, c] = a * (t0 * B[0, c] + t1 * B[1, c] + t2 * B[2, c])
-        for r in range(9):
-            b0, b1, b2 = B[0, r], B[1, r], B[2, r]
-            for c in range(9):
-                out[e, r, c] = b0 * DB[0, c] + b1 * DB[1, c] + b2 * DB[2, c]
-        N00, N11, N01 = a * stress[e, 0, 0], a * stress[e, 1, 1], a * stress[e, 0, 1]
-        for k in range(3):  # geometric part, G_kl = grad psi_k . A0 N grad psi_l
-            v0 = N00 * shape_gradient[e, k, 0] + N01 * shape_gradient[e, k, 1]
-            v1 = N01 * shape_gradient[e, k, 0] + N11 * shape_gradient[e, k, 1]
-            for m in range(3):
-                G = shape_gradient[e, m, 0] * v0 + shape_gradient[e, m, 1] * v1
-                for i in range(3):
-                    out[e, 3 * k + i, 3 * m + i] += G
+                out[e, 3 * k + i, 3 * m + i] += G
 
 
 def _subtract_pressure_stiffness(K, x, pressure):
@@ -151,43 +181,58 @@ def _add_pressure_forces(forces, dofs, x, pressure):
             forces[dofs[e, 3 * k + 2]] += f2
 
 
+def _wrinkled_tangent_at(c, s, b, s0, s1, s2, D, out):
+    """out (3, 3) = the consistent dN/dE of one wrinkled element, the formula of
+    ``wrinkle.wrinkling.Wrinkling._wrinkled_tangent`` in the same order of operations:
+    w = (c, s), b, the Voigt stress (s0, s1, s2) and D (3, 3) of the law at C'."""
+    cc, ss, cs = c * c, s * s, c * s
+    m0, m1 = 0.5 * cc, 0.5 * ss
+    bcs = b * cs
+    bdm2 = b * (cc - ss)
+    # the columns D M = [D b m', D m] and the rows of W D, each as a 3-tuple
+    DM0 = (
+        bcs * (D[0, 1] - D[0, 0]) + D[0, 2] * bdm2,
+        bcs * (D[1, 1] - D[1, 0]) + D[1, 2] * bdm2,
+        bcs * (D[2, 1] - D[2, 0]) + D[2, 2] * bdm2,
+    )
+    DM1 = (
+        D[0, 0] * m0 + D[0, 1] * m1 + D[0, 2] * cs,
+        D[1, 0] * m0 + D[1, 1] * m1 + D[1, 2] * cs,
+        D[2, 0] * m0 + D[2, 1] * m1 + D[2, 2] * cs,
+    )
+    WD0 = (c * D[0, 0] + s * D[2, 0], c * D[0, 1] + s * D[2, 1], c * D[0, 2] + s * D[2, 2])
+    WD1 = (s * D[1, 0] + c * D[2, 0], s * D[1, 1] + c * D[2, 1], s * D[1, 2] + c * D[2, 2])
+    J00 = c * DM0[0] + s * DM0[2] + (c * s2 - s * s0)
+    J01 = c * DM1[0] + s * DM1[2]
+    J10 = s * DM0[1] + c * DM0[2] + (c * s1 - s * s2)
+    J11 = s * DM1[1] + c * DM1[2]
+    inverse_det = 1.0 / (J00 * J11 - J01 * J10)
+    P0 = (
+        (J11 * WD0[0] - J01 * WD1[0]) * inverse_det,
+        (J11 * WD0[1] - J01 * WD1[1]) * inverse_det,
+        (J11 * WD0[2] - J01 * WD1[2]) * inverse_det,
+    )
+    P1 = (
+        (J00 * WD1[0] - J10 * WD0[0]) * inverse_det,
+        (J00 * WD1[1] - J10 * WD0[1]) * inverse_det,
+        (J00 * WD1[2] - J10 * WD0[2]) * inverse_det,
+    )
+    for i in range(3):
+        for j in range(i, 3):
+            value = 0.5 * (
+                (D[i, j] - (DM0[i] * P0[j] + DM1[i] * P1[j]))
+                + (D[j, i] - (DM0[j] * P0[i] + DM1[j] * P1[i]))
+            )
+            out[i, j] = value
+            out[j, i] = value
+
+
 def _wrinkled_tangent(c, s, b, stress, D, out):
-    """out[e] = the consistent dN/dE of wrinkled element e, the formula of
-    ``wrinkle.wrinkling.Wrinkling._wrinkled_tangent`` in the same order of operations."""
-    DM0 = np.empty(3)
-    DM1 = np.empty(3)
-    WD0 = np.empty(3)
-    WD1 = np.empty(3)
-    P0 = np.empty(3)
-    P1 = np.empty(3)
+    """out[e] = the consistent dN/dE of wrinkled element e (``_wrinkled_tangent_at``)."""
     for e in range(c.shape[0]):
-        ce, se, be = c[e], s[e], b[e]
-        cc, ss, cs = ce * ce, se * se, ce * se
-        m0, m1 = 0.5 * cc, 0.5 * ss
-        bcs = be * cs
-        bdm2 = be * (cc - ss)
-        s0, s1, s2 = stress[e, 0, 0], stress[e, 1, 1], stress[e, 0, 1]
-        for i in range(3):
-            DM0[i] = bcs * (D[e, i, 1] - D[e, i, 0]) + D[e, i, 2] * bdm2
-            DM1[i] = D[e, i, 0] * m0 + D[e, i, 1] * m1 + D[e, i, 2] * cs
-            WD0[i] = ce * D[e, 0, i] + se * D[e, 2, i]
-            WD1[i] = se * D[e, 1, i] + ce * D[e, 2, i]
-        J00 = ce * DM0[0] + se * DM0[2] + (ce * s2 - se * s0)
-        J01 = ce * DM1[0] + se * DM1[2]
-        J10 = se * DM0[1] + ce * DM0[2] + (ce * s1 - se * s2)
-        J11 = se * DM1[1] + ce * DM1[2]
-        inverse_det = 1.0 / (J00 * J11 - J01 * J10)
-        for j in range(3):
-            P0[j] = (J11 * WD0[j] - J01 * WD1[j]) * inverse_det
-            P1[j] = (J00 * WD1[j] - J10 * WD0[j]) * inverse_det
-        for i in range(3):
-            for j in range(i, 3):
-                value = 0.5 * (
-                    (D[e, i, j] - (DM0[i] * P0[j] + DM1[i] * P1[j]))
-                    + (D[e, j, i] - (DM0[j] * P0[i] + DM1[j] * P1[i]))
-                )
-                out[e, i, j] = value
-                out[e, j, i] = value
+        _wrinkled_tangent_at(
+            c[e], s[e], b[e], stress[e, 0, 0], stress[e, 1, 1], stress[e, 0, 1], D[e], out[e]
+        )
 
 
 def _scatter_add(data, positions, values):
@@ -195,6 +240,179 @@ def _scatter_add(data, positions, values):
     for e in range(positions.shape[0]):
         for q in range(positions.shape[1]):
             data[positions[e, q]] += values[e, q]
+
+
+def _svk_state_at(e, s0, s1, s2, e0, e1, e2, Q, R, D0, stress, thickness, energy):
+    """Element e's stress N = (s0, s1, s2) (Voigt), thickness D0 sqrt(1 + 2 E33) with
+    E33 = R . e and energy D0/2 e . Q e at the Voigt strain e = (e0, e1, e2) of a St
+    Venant-Kirchhoff law (``wrinkle.materials.svk``), written into the output arrays."""
+    stress[e, 0, 0], stress[e, 1, 1] = s0, s1
+    stress[e, 0, 1] = stress[e, 1, 0] = s2
+    E33 = R[0] * e0 + R[1] * e1 + R[2] * e2
+    thickness[e] = D0 * np.sqrt(max(1.0 + 2.0 * E33, 2.2250738585072014e-308))
+    energy[e] = (0.5 * D0) * (
+        e0 * (Q[0, 0] * e0 + 2.0 * (Q[0, 1] * e1 + Q[0, 2] * e2))
+        + e1 * (Q[1, 1] * e1 + 2.0 * Q[1, 2] * e2)
+        + Q[2, 2] * (e2 * e2)
+    )
+
+
+def _svk_wrinkling(
+    C, DQ, Q, R, D0, tolerance, noise, reference_stiffness, refine_slack, iterations_limit,
+    with_tangent, state, stress, tangent, thickness, phi_out, b_out, energy, fallback,
+):  # fmt: skip
+    """The whole relaxed response of ``wrinkle.wrinkling.Wrinkling.response`` for a St
+    Venant-Kirchhoff law (N = DQ e, DQ = D0 Q; E33 = R . e), one element at a time, in
+    parallel: the classification, the plain response of taut and slack elements and, for the
+    wrinkled ones, the first guess, the Newton iterations on N(C + b w (x) w) w = 0, the
+    admissibility and ``_compressed`` tests, the modified state and its consistent tangent,
+    in the order of operations of the NumPy code. An element whose Newton iterations fail or
+    whose solution is not admissible or compressed gets fallback[e] = True and is left for
+    the NumPy code (its angle search and ``_refine``)."""
+    eps64 = 64.0 * 2.220446049250313e-16
+    dq_norm = 0.0
+    for i in range(3):
+        for j in range(3):
+            dq_norm += DQ[i, j] * DQ[i, j]
+    dq_norm = np.sqrt(dq_norm)
+    D00, D01, D02 = DQ[0, 0], DQ[0, 1], DQ[0, 2]
+    D10, D11, D12 = DQ[1, 0], DQ[1, 1], DQ[1, 2]
+    D20, D21, D22 = DQ[2, 0], DQ[2, 1], DQ[2, 2]
+    for e in prange(C.shape[0]):
+        C00, C11, C01 = C[e, 0, 0], C[e, 1, 1], C[e, 0, 1]
+        e0, e1, e2 = 0.5 * (C00 - 1.0), 0.5 * (C11 - 1.0), C01
+        S0 = D00 * e0 + D01 * e1 + D02 * e2
+        S1 = D10 * e0 + D11 * e1 + D12 * e2
+        S2 = D20 * e0 + D21 * e1 + D22 * e2
+        fallback[e] = False
+        minor = 0.5 * (S0 + S1) - np.hypot(0.5 * (S0 - S1), S2)
+        if not minor < -noise:  # taut (also where C is not finite, as in the NumPy code)
+            state[e] = 0
+            _svk_state_at(e, S0, S1, S2, e0, e1, e2, Q, R, D0, stress, thickness, energy)
+            phi_out[e] = 0.0
+            b_out[e] = 0.0
+            if with_tangent:
+                for i in range(3):
+                    for j in range(3):
+                        tangent[e, i, j] = DQ[i, j]
+            continue
+        major = 0.5 * (C00 + C11) + np.hypot(0.5 * (C00 - C11), C01)
+        if major <= 1.0 + eps64:  # slack
+            state[e] = 2
+            stress[e, 0, 0] = stress[e, 1, 1] = stress[e, 0, 1] = stress[e, 1, 0] = 0.0
+            thickness[e] = D0
+            energy[e] = 0.0
+            phi_out[e] = 0.0
+            b_out[e] = 0.0
+            if with_tangent:
+                for i in range(3):
+                    for j in range(3):
+                        tangent[e, i, j] = 0.0
+            continue
+        state[e] = 1
+        g_tolerance = max(tolerance * np.sqrt(S0 * S0 + S1 * S1 + 2.0 * (S2 * S2)), eps64 * dq_norm)
+        # first guess (``_solve_conditions``): the minor direction of the plain stress, of C
+        # where both plain principal stresses are compressive; b linearised at b = 0
+        if S0 + S1 < 0.0 and S0 * S1 - S2 * S2 > 0.0:
+            phi = 0.5 * np.arctan2(2.0 * C01, C00 - C11) + 0.5 * np.pi
+        else:
+            phi = 0.5 * np.arctan2(2.0 * S2, S0 - S1) + 0.5 * np.pi
+        c, s = np.cos(phi), np.sin(phi)
+        m0, m1, m2 = 0.5 * c * c, 0.5 * s * s, c * s
+        slope = m0 * S0 + m1 * S1 + m2 * S2
+        curvature = (
+            m0 * (D00 * m0 + D01 * m1 + D02 * m2)
+            + m1 * (D10 * m0 + D11 * m1 + D12 * m2)
+            + m2 * (D20 * m0 + D21 * m1 + D22 * m2)
+        )
+        b = max(-slope / curvature, 0.0)
+        converged = False
+        for _ in range(iterations_limit):  # ``_newton``, ``_residual_and_jacobian``
+            c, s = np.cos(phi), np.sin(phi)
+            cc, ss, cs = c * c, s * s, c * s
+            m0, m1 = 0.5 * cc, 0.5 * ss
+            p0 = 0.5 * ((2.0 * (e0 + b * m0) + 1.0) - 1.0)
+            p1 = 0.5 * ((2.0 * (e1 + b * m1) + 1.0) - 1.0)
+            p2 = e2 + b * cs
+            s0 = D00 * p0 + D01 * p1 + D02 * p2
+            s1 = D10 * p0 + D11 * p1 + D12 * p2
+            s2 = D20 * p0 + D21 * p1 + D22 * p2
+            g0 = c * s0 + s * s2
+            g1 = s * s1 + c * s2
+            a0 = c * D00 + s * D20
+            a1 = c * D01 + s * D21
+            a2 = c * D02 + s * D22
+            d0 = s * D10 + c * D20
+            d1 = s * D11 + c * D21
+            d2 = s * D12 + c * D22
+            bcs = b * cs
+            bdm2 = b * (cc - ss)
+            J00 = bcs * (a1 - a0) + a2 * bdm2 + (c * s2 - s * s0)
+            J10 = bcs * (d1 - d0) + d2 * bdm2 + (c * s1 - s * s2)
+            J01 = a0 * m0 + a1 * m1 + a2 * cs
+            J11 = d0 * m0 + d1 * m1 + d2 * cs
+            det = J00 * J11 - J01 * J10
+            step_phi = (J01 * g1 - J11 * g0) / det
+            step_b = (J10 * g0 - J00 * g1) / det
+            if not (np.isfinite(step_phi) and np.isfinite(step_b)):
+                break
+            phi += step_phi
+            b += step_b
+            if (abs(step_phi) <= 1e-14 and abs(step_b) <= 1e-14 * (1.0 + abs(b))) or np.sqrt(
+                g0 * g0 + g1 * g1
+            ) <= g_tolerance:
+                converged = True
+                break
+        if not converged:
+            fallback[e] = True
+            continue
+        # ``_admissible``: b >= 0, non-negative tension, |g| within 10 tolerances
+        c, s = np.cos(phi), np.sin(phi)
+        cs = c * s
+        p0 = 0.5 * ((2.0 * (e0 + b * (0.5 * (c * c))) + 1.0) - 1.0)
+        p1 = 0.5 * ((2.0 * (e1 + b * (0.5 * (s * s))) + 1.0) - 1.0)
+        p2 = e2 + b * cs
+        s0 = D00 * p0 + D01 * p1 + D02 * p2
+        s1 = D10 * p0 + D11 * p1 + D12 * p2
+        s2 = D20 * p0 + D21 * p1 + D22 * p2
+        g0, g1 = c * s0 + s * s2, s * s1 + c * s2
+        if not (
+            b >= -1e-12
+            and s0 + s1 >= -g_tolerance
+            and np.sqrt(g0 * g0 + g1 * g1) <= 10.0 * g_tolerance
+        ):
+            fallback[e] = True
+            continue
+        turned = np.fmod(phi, np.pi)  # np.mod(phi, pi)
+        if turned < 0.0:
+            turned += np.pi
+        if turned != phi:
+            c, s = np.cos(turned), np.sin(turned)
+        b = max(b, 0.0)
+        bc, bs = b * c, b * s
+        p0 = 0.5 * ((C00 + bc * c) - 1.0)  # the modified state C' = C + b w (x) w
+        p1 = 0.5 * ((C11 + bs * s) - 1.0)
+        p2 = C01 + bc * s
+        s0 = D00 * p0 + D01 * p1 + D02 * p2
+        s1 = D10 * p0 + D11 * p1 + D12 * p2
+        s2 = D20 * p0 + D21 * p1 + D22 * p2
+        # ``_compressed``
+        g0, g1 = c * s0 + s * s2, s * s1 + c * s2
+        allowed = min(
+            max(
+                refine_slack * tolerance * np.sqrt(s0 * s0 + s1 * s1 + 2.0 * (s2 * s2)),
+                eps64 * reference_stiffness,
+            ),
+            g_tolerance,
+        )
+        if np.sqrt(g0 * g0 + g1 * g1) > allowed or s0 + s1 < -allowed:
+            fallback[e] = True
+            continue
+        _svk_state_at(e, s0, s1, s2, p0, p1, p2, Q, R, D0, stress, thickness, energy)
+        phi_out[e] = turned
+        b_out[e] = b
+        if with_tangent:
+            _wrinkled_tangent_at(c, s, b, s0, s1, s2, DQ, tangent[e])
 
 
 _kernels: dict[str, Callable[..., None]] = {}
@@ -205,9 +423,20 @@ def _compiled(name: str):
     if not _kernels:
         import numba
 
+        # the names the kernels call are bound to their compiled versions first, so that
+        # the kernels compile against them
+        global prange, _wrinkled_tangent_at, _element_stiffness_at, _svk_state_at
+        prange = numba.prange
         jit = numba.njit(cache=True, boundscheck=False)
+        _wrinkled_tangent_at = jit(_wrinkled_tangent_at)
+        _element_stiffness_at = jit(_element_stiffness_at)
+        _svk_state_at = jit(_svk_state_at)
+        parallel = numba.njit(cache=True, boundscheck=False, parallel=True)
         _kernels.update(
-            element_stiffness=jit(_element_stiffness),
+            svk_wrinkling=numba.njit(
+                cache=True, boundscheck=False, parallel=True, error_model="numpy"
+            )(_svk_wrinkling),
+            element_stiffness=parallel(_element_stiffness),
             subtract_pressure_stiffness=jit(_subtract_pressure_stiffness),
             nodal_forces=jit(_nodal_forces),
             add_pressure_forces=jit(_add_pressure_forces),
@@ -302,3 +531,50 @@ def scatter_add(data: np.ndarray, positions: np.ndarray, matrices: np.ndarray) -
     indices, matrices (m, 9, 9); repeated positions are summed."""
     values = np.ascontiguousarray(matrices).reshape(positions.shape[0], positions.shape[1])
     _compiled("scatter_add")(data, np.ascontiguousarray(positions), values)
+
+
+def svk_wrinkling(
+    C: np.ndarray,
+    law: tuple[np.ndarray, np.ndarray, np.ndarray, float],
+    tolerance: float,
+    noise: float,
+    reference_stiffness: float,
+    refine_slack: float,
+    iterations: int,
+    tangent: bool,
+) -> tuple[Any, ...]:
+    """The relaxed response of a St Venant-Kirchhoff law at C (m, 2, 2), material frame, in
+    parallel (``wrinkle.wrinkling.Wrinkling.response``): law = (D0 Q, Q, R, D0) with Q (3, 3)
+    the plane-stress stiffness, R (3,) the row of E33 and D0 the thickness. Returns state
+    (m,) int8, stress (m, 2, 2), tangent (m, 3, 3) or None, thickness, wrinkle angle and
+    parameter, energy per unit reference area, each (m,), and fallback (m,) bool: the wrinkled
+    elements this kernel did not resolve, whose other entries are undefined."""
+    m = C.shape[0]
+    DQ, Q, R, D0 = law
+    state = np.empty(m, dtype=np.int8)
+    stress = np.empty((m, 2, 2))
+    out_tangent = np.empty((m, 3, 3) if tangent else (1, 3, 3))
+    thickness, phi, b, energy = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    fallback = np.empty(m, dtype=np.bool_)
+    _compiled("svk_wrinkling")(
+        np.ascontiguousarray(C, dtype=float),
+        DQ,
+        Q,
+        R,
+        D0,
+        tolerance,
+        noise,
+        reference_stiffness,
+        refine_slack,
+        iterations,
+        tangent,
+        state,
+        stress,
+        out_tangent,
+        thickness,
+        phi,
+        b,
+        energy,
+        fallback,
+    )
+    return state, stress, out_tangent if tangent else None, thickness, phi, b, energy, fallback

@@ -33,12 +33,13 @@ minimum of the relaxed energy min over A >= 0 of w(C + A), so the element carrie
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from wrinkle import compiled as kernels
 from wrinkle.materials.base import Material, tangent_of
+from wrinkle.materials.svk import StVenantKirchhoff
 
 __all__ = [
     "SLACK",
@@ -148,6 +149,11 @@ class Wrinkling:
     its energy and thickness at C0 (0 and the reference thickness for an ordinary material).
     """
 
+    #: the whole response of a St Venant-Kirchhoff law by one compiled kernel where the
+    #: element loops are compiled (False: only the wrinkled tangent, as before the parallel
+    #: kernels of 4 December 2026)
+    compiled_linear_law = True
+
     def __init__(self, material: Material, tolerance: float = 1e-13):
         self.material = material
         self.tolerance = tolerance
@@ -178,6 +184,17 @@ class Wrinkling:
             self._natural_inverse = np.linalg.inv(self._natural_factor)
             self.slack_energy = float(material.energy(C0)[0])
             self.slack_thickness = float(material.response(C0, tangent=False).thickness[0])
+        # a St Venant-Kirchhoff law (linear, no stress-free state of its own) has the whole
+        # response compiled (``wrinkle.compiled.svk_wrinkling``): (D0 Q, Q, R, D0)
+        self._linear_law: tuple | None = None
+        if type(material) is StVenantKirchhoff:
+            Q = np.ascontiguousarray(material.plane_stress_stiffness)
+            self._linear_law = (
+                material.thickness * Q,
+                Q,
+                np.ascontiguousarray(material.out_of_plane_strain[0]),
+                float(material.thickness),
+            )
 
     @property
     def thickness(self) -> float:
@@ -231,8 +248,12 @@ class Wrinkling:
         self, C: np.ndarray, tangent: bool = True, compiled: bool = False
     ) -> WrinklingResponse:
         """Relaxed response at C (n, 2, 2), material frame: state, stress, consistent tangent
-        (if ``tangent``), thickness, wrinkle angle and parameter, energy. compiled: the
-        wrinkled elements' tangent by the Numba kernel (the same operations)."""
+        (if ``tangent``), thickness, wrinkle angle and parameter, energy. compiled: by the
+        Numba kernels (the same operations): the whole response of a St Venant-Kirchhoff law
+        (``wrinkle.compiled.svk_wrinkling``; the elements it leaves, by the code below), the
+        wrinkled elements' tangent of any other law."""
+        if compiled and self.compiled_linear_law and self._linear_law is not None:
+            return self._compiled_response(C, tangent)
         n = C.shape[0]
         plain = self.material.response(C, tangent=tangent)
         state = self.classify(C, plain.stress)
@@ -301,6 +322,35 @@ class Wrinkling:
                     c_w, s_w, b_w, modified.stress, tangent_of(modified)
                 )
         return WrinklingResponse(state, stress, stiffness, thickness, phi, b, energy)
+
+    def _compiled_response(self, C: np.ndarray, tangent: bool) -> WrinklingResponse:
+        """``response`` of a St Venant-Kirchhoff law by ``wrinkle.compiled.svk_wrinkling``;
+        the wrinkled elements it leaves (Newton failed, or its solution inadmissible or
+        compressed) by the NumPy code, with its angle search and ``_refine``."""
+        law = self._linear_law
+        assert law is not None
+        *arrays, fallback = kernels.svk_wrinkling(
+            C,
+            law,
+            self.tolerance,
+            self.stress_noise,
+            self.reference_stiffness,
+            _REFINE_SLACK,
+            _NEWTON_ITERATIONS,
+            tangent,
+        )
+        result = WrinklingResponse(*arrays)
+        rows = np.flatnonzero(fallback)
+        if rows.size:
+            try:
+                rest = self.response(C[rows], tangent=tangent)
+            except WrinklingError as error:
+                raise WrinklingError(rows[error.elements]) from None
+            for field in fields(result):
+                array = getattr(result, field.name)
+                if array is not None:
+                    array[rows] = getattr(rest, field.name)
+        return result
 
     # -- wrinkled state --------------------------------------------------------------------
     # Vectors and 2x2 / 3x3 matrices are handled as their (m,) component arrays: for batches
