@@ -248,3 +248,14 @@ def test_only_a_plain_svk_law_has_its_response_compiled():
     assert Wrinkling(svk)._linear_law is not None
     assert Wrinkling(Prestressed(svk, [1e3, 1e3, 0.0]))._linear_law is None
     assert Wrinkling(NeoHookean(mu=1e6, thickness=1e-3))._linear_law is None
+
+
+@needs_numba
+def test_asymmetry_equals_numpy_norms():
+    """|A - A^T| and |A| in one pass equal NumPy's norms of the same values to round-off."""
+    rng = np.random.default_rng(11)
+    data = rng.normal(size=10_001)
+    transpose = rng.permutation(10_001)
+    difference, norm = compiled.asymmetry(data, transpose)
+    assert difference == pytest.approx(np.linalg.norm(data - data[transpose]), rel=1e-12)
+    assert norm == pytest.approx(np.linalg.norm(data), rel=1e-12)

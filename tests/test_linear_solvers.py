@@ -96,7 +96,10 @@ def test_backend_solves_to_round_off(name):
         assert np.linalg.norm(B @ x - b) <= 1e-9 * np.linalg.norm(b)
 
 
-def test_symmetry_check_and_upper_triangle():
+@pytest.mark.parametrize("kernels", ["0", "1"])
+def test_symmetry_check_and_upper_triangle(kernels, monkeypatch):
+    """The same verdicts with NumPy's norms and with the compiled ``asymmetry``."""
+    monkeypatch.setenv("WRINKLE_NUMBA", kernels)
     A = spd_matrix()
     check = SymmetryCheck()
     assert check(A)

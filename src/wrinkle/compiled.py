@@ -27,6 +27,9 @@ installed (extra ``fast``); NumPy versions of the same formulas are the fallback
   tangent at C' as arguments and calls no material): 6.9 -> 1.5 ms for 60,000 elements.
 - ``scatter_add``: data[positions[e, q]] += K[e, q] for every element entry, the sum that
   ``SparsityPattern.add_to_data`` forms with ``np.bincount``.
+- ``asymmetry``: |A - A^T| and |A| of the symmetry check of a matrix with follower loads
+  (``wrinkle.solvers.linear.SymmetryCheck``) in one parallel pass over its values, on matrices
+  of at least MIN_ELEMENTS rows.
 
 Measured by ``benchmarks/kernels.py`` (README, Performance), 10^5 / 10^6 elements: forces and
 stiffness of all elements 0.109 -> 0.088 s / 1.55 -> 0.90 s (the wrinkling response around
@@ -34,10 +37,10 @@ them stays NumPy), block-wise assembly 0.035 -> 0.009 s / 0.27 -> 0.10 s; the la
 ``benchmarks/element_evaluation.py`` on the 10^5-element airbag. All give the NumPy results
 to round-off (the last four bit for bit: same operations in the same order).
 
-``svk_wrinkling`` and ``element_stiffness`` run on all of Numba's threads (one a core, or
-``NUMBA_NUM_THREADS``), the others on one. The parallel loops gain only where nothing else
-keeps the cores busy: during a solve, OpenBLAS's idle threads are kept from spinning
-(``wrinkle.threads``).
+``svk_wrinkling``, ``element_stiffness`` and ``asymmetry`` run on all of Numba's threads (one
+a core, or ``NUMBA_NUM_THREADS``), the others on one. The parallel loops gain only where
+nothing else keeps the cores busy: during a solve, OpenBLAS's idle threads are kept from
+spinning (``wrinkle.threads``).
 
 Numba is imported, and the kernels compiled (a few seconds, then cached on disk,
 ``cache=True``), at their first use, and they are used from MIN_ELEMENTS elements on, where
@@ -57,6 +60,7 @@ import numpy as np
 
 __all__ = [
     "MIN_ELEMENTS",
+    "asymmetry",
     "add_pressure_forces",
     "element_stiffness",
     "enabled",
@@ -415,6 +419,19 @@ def _svk_wrinkling(
             _wrinkled_tangent_at(c, s, b, s0, s1, s2, DQ, tangent[e])
 
 
+def _asymmetry(data, transpose):
+    """(sum (data - data[transpose])^2, sum data^2) in one pass, in parallel: the squared
+    Frobenius norms of A - A^T and of A for CSR values data whose transposes sit at the
+    positions transpose."""
+    difference = 0.0
+    total = 0.0
+    for i in prange(data.shape[0]):
+        d = data[i] - data[transpose[i]]
+        difference += d * d
+        total += data[i] * data[i]
+    return difference, total
+
+
 _kernels: dict[str, Callable[..., None]] = {}
 
 
@@ -433,6 +450,7 @@ def _compiled(name: str):
         _svk_state_at = jit(_svk_state_at)
         parallel = numba.njit(cache=True, boundscheck=False, parallel=True)
         _kernels.update(
+            asymmetry=parallel(_asymmetry),
             svk_wrinkling=numba.njit(
                 cache=True, boundscheck=False, parallel=True, error_model="numpy"
             )(_svk_wrinkling),
@@ -578,3 +596,13 @@ def svk_wrinkling(
         fallback,
     )
     return state, stress, out_tangent if tangent else None, thickness, phi, b, energy, fallback
+
+
+def asymmetry(data: np.ndarray, transpose: np.ndarray) -> tuple[float, float]:
+    """|A - A^T|_F and |A|_F of a real matrix on a structurally symmetric CSR pattern from its
+    values data (nnz,) and the position in data of each entry's transpose (nnz,)
+    (``wrinkle.solvers.linear.SymmetryCheck``), without the (nnz,) temporaries of NumPy."""
+    difference, total = _compiled("asymmetry")(
+        np.ascontiguousarray(data, dtype=float), np.ascontiguousarray(transpose)
+    )
+    return float(np.sqrt(difference)), float(np.sqrt(total))
