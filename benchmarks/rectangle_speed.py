@@ -9,8 +9,14 @@ the whole matrix factorised.
 (``Pardiso.cholesky``), no refinement unless pivots were perturbed (``Pardiso.refinement =
 0``), shortened steps evaluated with the stiffness at once
 (``RegularisedNewton.backtrack_stiffness``), the whole matrix factorised.
-"new" (the defaults): as "whole", with only the free block factorised
+"block" (4 December 2026): as "whole", with only the free block factorised
 (``RegularisedSolver.free_block``, ``wrinkle.solvers.linear.FreeBlock``).
+"blas": as "block", with OpenBLAS on one thread during the solve.
+"new" (the defaults since the parallel kernels, 4 December 2026): as "block", with OpenBLAS
+on one thread during the solve (``RegularisedSolver.blas_threads``, ``wrinkle.threads``) and
+the St Venant-Kirchhoff wrinkling response in one parallel Numba kernel
+(``Wrinkling.compiled_linear_law``, ``wrinkle.compiled.svk_wrinkling``; the element stiffness
+kernel runs in parallel in every setting).
 
 Prints, for each mesh and setting, the median over the rounds of the wall time and of the
 seconds per part (element evaluation, assembly, linear solves, rest), the iterations and
@@ -19,7 +25,7 @@ of a solve to tolerance 1e-8 on the same mesh (new settings).
 
     python benchmarks/rectangle_speed.py                       # 80, 160, 320; 1 round
     python benchmarks/rectangle_speed.py --sizes 320 --rounds 3 --reference
-    python benchmarks/rectangle_speed.py --settings old whole new
+    python benchmarks/rectangle_speed.py --settings old whole block new
 """
 
 from __future__ import annotations
@@ -31,13 +37,28 @@ from pathlib import Path
 
 from wrinkle.case import read_case
 from wrinkle.solvers import base, linear, newton
+from wrinkle.wrinkling import Wrinkling
 
 CASE = Path(__file__).parent / "hard_cases" / "sheared_rectangle.toml"
 PARTS = ("element evaluation", "assembly", "linear solves", "rest")
+_BEFORE = {"blas_threads": None, "compiled_law": False}
 SETTINGS = {
-    "old": {"cholesky": False, "refinement": None, "backtrack_stiffness": False, "free": False},
-    "whole": {"cholesky": True, "refinement": 0, "backtrack_stiffness": True, "free": False},
-    "new": {"cholesky": True, "refinement": 0, "backtrack_stiffness": True, "free": True},
+    "old": {"cholesky": False, "refinement": None, "backtrack_stiffness": False, "free": False}
+    | _BEFORE,
+    "whole": {"cholesky": True, "refinement": 0, "backtrack_stiffness": True, "free": False}
+    | _BEFORE,
+    "block": {"cholesky": True, "refinement": 0, "backtrack_stiffness": True, "free": True}
+    | _BEFORE,
+    "blas": {"cholesky": True, "refinement": 0, "backtrack_stiffness": True, "free": True}
+    | {"blas_threads": 1, "compiled_law": False},
+    "new": {
+        "cholesky": True,
+        "refinement": 0,
+        "backtrack_stiffness": True,
+        "free": True,
+        "blas_threads": 1,
+        "compiled_law": True,
+    },
 }
 
 
@@ -46,6 +67,8 @@ def apply(setting: dict) -> None:
     linear.Pardiso.refinement = setting["refinement"]
     newton.RegularisedNewton.backtrack_stiffness = setting["backtrack_stiffness"]
     base.RegularisedSolver.free_block = setting["free"]
+    base.RegularisedSolver.blas_threads = setting["blas_threads"]
+    Wrinkling.compiled_linear_law = setting["compiled_law"]
 
 
 def solve(nx: int, setting: dict, tolerance: float | None = None) -> dict:
@@ -73,7 +96,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=1)
     parser.add_argument("--reference", action="store_true", help="also solve to 1e-8")
     parser.add_argument(
-        "--settings", nargs="+", default=["whole", "new"], choices=list(SETTINGS), help="in turns"
+        "--settings", nargs="+", default=["block", "new"], choices=list(SETTINGS), help="in turns"
     )
     args = parser.parse_args()
     header = (

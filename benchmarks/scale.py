@@ -392,6 +392,14 @@ def main() -> None:
         help="factorise the whole matrix, the held components' stored zeros too (the solver "
         "before 4 December 2026; RegularisedSolver.free_block = False)",
     )
+    parser.add_argument(
+        "--before-parallel",
+        action="store_true",
+        help="OpenBLAS on as many threads as it starts and the St Venant-Kirchhoff response in "
+        "NumPy (the solver before the parallel kernels of 4 December 2026; "
+        "RegularisedSolver.blas_threads = None, Wrinkling.compiled_linear_law = False; the "
+        "element stiffness and the symmetry check stay parallel)",
+    )
     parser.add_argument("--csv", default="scale.csv")
     parser.add_argument("--one", nargs=2, metavar=("PROBLEM", "N"), help=argparse.SUPPRESS)
     parser.add_argument("--progress", help=argparse.SUPPRESS)  # --one's partial rows go here
@@ -401,6 +409,12 @@ def main() -> None:
             from wrinkle.solvers.base import RegularisedSolver
 
             RegularisedSolver.free_block = False
+        if args.before_parallel:
+            from wrinkle.solvers.base import RegularisedSolver
+            from wrinkle.wrinkling import Wrinkling
+
+            RegularisedSolver.blas_threads = None
+            Wrinkling.compiled_linear_law = False
         row = solve_one(
             args.one[0], int(args.one[1]), args.linear_solver, args.max_iterations, args.progress
         )
@@ -437,6 +451,8 @@ def main() -> None:
                 command += ["--max-iterations", str(args.max_iterations)]
             if args.whole_matrix:
                 command.append("--whole-matrix")
+            if args.before_parallel:
+                command.append("--before-parallel")
             try:
                 done = subprocess.run(
                     command,
