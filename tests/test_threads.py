@@ -1,6 +1,6 @@
-"""OpenBLAS on one thread during the solves (``wrinkle.threads``): the context limits NumPy's
-OpenBLAS and restores it, and the Newton-type solvers and the bordered solver run inside
-it with their ``blas_threads``."""
+"""OpenBLAS on one thread during the solves (``wrinkle.threads``): the context limits every
+loaded OpenBLAS and restores it, and the Newton-type solvers and the bordered solver run
+inside it with their ``blas_threads``."""
 
 from __future__ import annotations
 
@@ -26,9 +26,10 @@ def openblas_threads() -> list[int]:
 
 
 def test_the_context_limits_openblas_and_restores_it():
-    np.ones(3) @ np.ones(3)  # NumPy's OpenBLAS is loaded
+    np.ones(3) @ np.ones(3)  # NumPy's BLAS is loaded
     before = openblas_threads()
-    assert before
+    if not before:
+        pytest.skip("NumPy's BLAS is not OpenBLAS")
     with blas_threads(1):
         assert openblas_threads() == [1] * len(before)
     assert openblas_threads() == before

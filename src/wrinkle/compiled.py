@@ -4,7 +4,8 @@ installed (extra ``fast``); NumPy versions of the same formulas are the fallback
 - ``svk_wrinkling``: the whole relaxed response of a St Venant-Kirchhoff law
   (``wrinkle.wrinkling.Wrinkling.response``: the states, the wrinkling conditions solved by
   Newton's method from the same first guess, the tests of the solution, the modified state's
-  stress, thickness, energy and consistent tangent), one element at a time in parallel. The
+  stress, thickness, energy and consistent tangent), one element at a time in parallel; the
+  same states, the values to round-off. The
   rare element it does not resolve is left to the NumPy code, with its angle search and
   ``_refine``. Measured in a solve by ``benchmarks/rectangle_speed.py`` (docs/performance.md,
   "OpenBLAS's threads").
@@ -28,14 +29,17 @@ installed (extra ``fast``); NumPy versions of the same formulas are the fallback
 - ``scatter_add``: data[positions[e, q]] += K[e, q] for every element entry, the sum that
   ``SparsityPattern.add_to_data`` forms with ``np.bincount``.
 - ``asymmetry``: |A - A^T| and |A| of the symmetry check of a matrix with follower loads
-  (``wrinkle.solvers.linear.SymmetryCheck``) in one parallel pass over its values, on matrices
-  of at least MIN_ELEMENTS rows.
+  (``wrinkle.solvers.linear.SymmetryCheck``) in one parallel pass over its values.
 
-Measured by ``benchmarks/kernels.py`` (README, Performance), 10^5 / 10^6 elements: forces and
-stiffness of all elements 0.109 -> 0.088 s / 1.55 -> 0.90 s (the wrinkling response around
-them stays NumPy), block-wise assembly 0.035 -> 0.009 s / 0.27 -> 0.10 s; the last three by
-``benchmarks/element_evaluation.py`` on the 10^5-element airbag. All give the NumPy results
-to round-off (the last four bit for bit: same operations in the same order).
+Measured by ``benchmarks/kernels.py`` (README, Performance), 10^5 / 10^6 elements, before
+``svk_wrinkling`` and the parallel loops: forces and stiffness of all elements 0.109 -> 0.088
+s / 1.55 -> 0.90 s (the wrinkling response around them NumPy then), block-wise assembly 0.035
+-> 0.009 s / 0.27 -> 0.10 s; ``add_pressure_forces``, ``wrinkled_tangent`` and
+``scatter_add`` by ``benchmarks/element_evaluation.py`` on the 10^5-element airbag. All give
+the NumPy results to round-off; ``nodal_forces``, ``subtract_pressure_stiffness``,
+``add_pressure_forces`` and ``wrinkled_tangent`` bit for bit (the same operations in the
+same order). ``svk_wrinkling`` follows the NumPy code's formulas step by step, but its
+sums of squares and Numba's ``arctan2`` differ from NumPy's in the last bit.
 
 ``svk_wrinkling``, ``element_stiffness`` and ``asymmetry`` run on all of Numba's threads (one
 a core, or ``NUMBA_NUM_THREADS``), the others on one. The parallel loops gain only where
@@ -53,6 +57,7 @@ from __future__ import annotations
 import functools
 import importlib.util
 import os
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -270,7 +275,8 @@ def _svk_wrinkling(
     parallel: the classification, the plain response of taut and slack elements and, for the
     wrinkled ones, the first guess, the Newton iterations on N(C + b w (x) w) w = 0, the
     admissibility and ``_compressed`` tests, the modified state and its consistent tangent,
-    in the order of operations of the NumPy code. An element whose Newton iterations fail or
+    step by step as the NumPy code (to round-off: sums and arctan2 differ in the last bit).
+    An element whose Newton iterations fail or
     whose solution is not admissible or compressed gets fallback[e] = True and is left for
     the NumPy code (its angle search and ``_refine``)."""
     eps64 = 64.0 * 2.220446049250313e-16
@@ -433,35 +439,45 @@ def _asymmetry(data, transpose):
 
 
 _kernels: dict[str, Callable[..., None]] = {}
+_making = threading.Lock()
 
 
 def _compiled(name: str):
-    """The Numba-compiled version of the loop ``name`` (compiled or loaded at the first call)."""
+    """The Numba-compiled version of the loop ``name`` (compiled or loaded at the first call;
+    one thread at a time makes them)."""
     if not _kernels:
-        import numba
-
-        # the names the kernels call are bound to their compiled versions first, so that
-        # the kernels compile against them
-        global prange, _wrinkled_tangent_at, _element_stiffness_at, _svk_state_at
-        prange = numba.prange
-        jit = numba.njit(cache=True, boundscheck=False)
-        _wrinkled_tangent_at = jit(_wrinkled_tangent_at)
-        _element_stiffness_at = jit(_element_stiffness_at)
-        _svk_state_at = jit(_svk_state_at)
-        parallel = numba.njit(cache=True, boundscheck=False, parallel=True)
-        _kernels.update(
-            asymmetry=parallel(_asymmetry),
-            svk_wrinkling=numba.njit(
-                cache=True, boundscheck=False, parallel=True, error_model="numpy"
-            )(_svk_wrinkling),
-            element_stiffness=parallel(_element_stiffness),
-            subtract_pressure_stiffness=jit(_subtract_pressure_stiffness),
-            nodal_forces=jit(_nodal_forces),
-            add_pressure_forces=jit(_add_pressure_forces),
-            wrinkled_tangent=jit(_wrinkled_tangent),
-            scatter_add=jit(_scatter_add),
-        )
+        with _making:
+            if not _kernels:
+                _make_kernels()
     return _kernels[name]
+
+
+def _make_kernels() -> None:
+    """Fill ``_kernels``. The per-element helpers the kernels call are bound to their
+    compiled versions first, so that the kernels compile against them."""
+    import numba
+
+    global prange, _wrinkled_tangent_at, _element_stiffness_at, _svk_state_at
+    prange = numba.prange
+    jit = numba.njit(cache=True, boundscheck=False)
+    parallel = numba.njit(cache=True, boundscheck=False, parallel=True)
+    # (py_func: the plain function, should the helpers have been compiled before)
+    _wrinkled_tangent_at = jit(getattr(_wrinkled_tangent_at, "py_func", _wrinkled_tangent_at))
+    _element_stiffness_at = jit(getattr(_element_stiffness_at, "py_func", _element_stiffness_at))
+    _svk_state_at = jit(getattr(_svk_state_at, "py_func", _svk_state_at))
+    kernels: dict[str, Callable[..., None]] = {
+        "asymmetry": parallel(_asymmetry),
+        "svk_wrinkling": numba.njit(
+            cache=True, boundscheck=False, parallel=True, error_model="numpy"
+        )(_svk_wrinkling),
+        "element_stiffness": parallel(_element_stiffness),
+        "subtract_pressure_stiffness": jit(_subtract_pressure_stiffness),
+        "nodal_forces": jit(_nodal_forces),
+        "add_pressure_forces": jit(_add_pressure_forces),
+        "wrinkled_tangent": jit(_wrinkled_tangent),
+        "scatter_add": jit(_scatter_add),
+    }
+    _kernels.update(kernels)
 
 
 def element_stiffness(

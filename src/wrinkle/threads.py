@@ -16,17 +16,42 @@ extra ``fast``). MKL's and Numba's threads are left alone. Measured by
 from __future__ import annotations
 
 import contextlib
+import sys
+from typing import Any
 
 __all__ = ["blas_threads"]
 
+# threadpoolctl's controller of the OpenBLAS libraries loaded, and the number of modules
+# imported when it was made: scanning the loaded libraries costs about 1 ms, so it is made
+# again only after new imports (one of them may have loaded another OpenBLAS)
+_openblas: Any = None
+_modules_at_scan = -1
+
+
+def _openblas_controller() -> Any:
+    """The OpenBLAS libraries in this process (threadpoolctl's ``ThreadpoolController``
+    selected by internal_api "openblas", whatever their file names), or None without
+    threadpoolctl."""
+    global _openblas, _modules_at_scan
+    if len(sys.modules) != _modules_at_scan:
+        _modules_at_scan = len(sys.modules)
+        try:
+            from threadpoolctl import ThreadpoolController  # type: ignore[import-untyped, import-not-found, unused-ignore]
+        except ImportError:
+            _openblas = None
+        else:
+            _openblas = ThreadpoolController().select(internal_api="openblas")
+    return _openblas
+
 
 def blas_threads(limit: int | None) -> contextlib.AbstractContextManager:
-    """A context in which OpenBLAS (NumPy's and SciPy's) uses at most ``limit`` threads
-    (threadpoolctl); nothing for limit None or without threadpoolctl."""
+    """A context in which every loaded OpenBLAS (NumPy's, SciPy's) uses at most ``limit``
+    threads, restored on leaving; nothing for limit None, without threadpoolctl or without
+    OpenBLAS. The setting is process-wide: solves run at once in threads of one process share
+    it."""
     if limit is None:
         return contextlib.nullcontext()
-    try:
-        from threadpoolctl import threadpool_limits  # type: ignore[import-untyped, import-not-found, unused-ignore]
-    except ImportError:
+    controller = _openblas_controller()
+    if controller is None or not controller.lib_controllers:
         return contextlib.nullcontext()
-    return threadpool_limits(limits={"libscipy_openblas": limit})
+    return controller.limit(limits=limit)

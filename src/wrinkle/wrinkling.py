@@ -38,7 +38,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from wrinkle import compiled as kernels
-from wrinkle.materials.base import Material, tangent_of
+from wrinkle.materials.base import Material, as_cauchy_green_batch, tangent_of
 from wrinkle.materials.svk import StVenantKirchhoff
 
 __all__ = [
@@ -187,7 +187,7 @@ class Wrinkling:
         # a St Venant-Kirchhoff law (linear, no stress-free state of its own) has the whole
         # response compiled (``wrinkle.compiled.svk_wrinkling``): (D0 Q, Q, R, D0)
         self._linear_law: tuple | None = None
-        if type(material) is StVenantKirchhoff:
+        if type(material) is StVenantKirchhoff and natural is None:
             Q = np.ascontiguousarray(material.plane_stress_stiffness)
             self._linear_law = (
                 material.thickness * Q,
@@ -249,7 +249,7 @@ class Wrinkling:
     ) -> WrinklingResponse:
         """Relaxed response at C (n, 2, 2), material frame: state, stress, consistent tangent
         (if ``tangent``), thickness, wrinkle angle and parameter, energy. compiled: by the
-        Numba kernels (the same operations): the whole response of a St Venant-Kirchhoff law
+        Numba kernels (the same formulas): the whole response of a St Venant-Kirchhoff law
         (``wrinkle.compiled.svk_wrinkling``; the elements it leaves, by the code below), the
         wrinkled elements' tangent of any other law."""
         if compiled and self.compiled_linear_law and self._linear_law is not None:
@@ -329,6 +329,7 @@ class Wrinkling:
         compressed) by the NumPy code, with its angle search and ``_refine``."""
         law = self._linear_law
         assert law is not None
+        C = as_cauchy_green_batch(C, "Wrinkling")
         *arrays, fallback = kernels.svk_wrinkling(
             C,
             law,
