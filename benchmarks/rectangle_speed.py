@@ -42,23 +42,15 @@ from wrinkle.wrinkling import Wrinkling
 CASE = Path(__file__).parent / "hard_cases" / "sheared_rectangle.toml"
 PARTS = ("element evaluation", "assembly", "linear solves", "rest")
 _BEFORE = {"blas_threads": None, "compiled_law": False}
+_WHOLE = {"cholesky": True, "refinement": 0, "backtrack_stiffness": True, "free": False}
+_BLOCK = _WHOLE | {"free": True}
 SETTINGS = {
     "old": {"cholesky": False, "refinement": None, "backtrack_stiffness": False, "free": False}
     | _BEFORE,
-    "whole": {"cholesky": True, "refinement": 0, "backtrack_stiffness": True, "free": False}
-    | _BEFORE,
-    "block": {"cholesky": True, "refinement": 0, "backtrack_stiffness": True, "free": True}
-    | _BEFORE,
-    "blas": {"cholesky": True, "refinement": 0, "backtrack_stiffness": True, "free": True}
-    | {"blas_threads": 1, "compiled_law": False},
-    "new": {
-        "cholesky": True,
-        "refinement": 0,
-        "backtrack_stiffness": True,
-        "free": True,
-        "blas_threads": 1,
-        "compiled_law": True,
-    },
+    "whole": _WHOLE | _BEFORE,
+    "block": _BLOCK | _BEFORE,
+    "blas": _BLOCK | {"blas_threads": 1, "compiled_law": False},
+    "new": _BLOCK | {"blas_threads": 1, "compiled_law": True},
 }
 
 

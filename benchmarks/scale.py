@@ -405,14 +405,12 @@ def main() -> None:
     parser.add_argument("--progress", help=argparse.SUPPRESS)  # --one's partial rows go here
     args = parser.parse_args()
     if args.one:
-        if args.whole_matrix:
-            from wrinkle.solvers.base import RegularisedSolver
+        from wrinkle.solvers.base import RegularisedSolver
+        from wrinkle.wrinkling import Wrinkling
 
+        if args.whole_matrix:
             RegularisedSolver.free_block = False
         if args.before_parallel:
-            from wrinkle.solvers.base import RegularisedSolver
-            from wrinkle.wrinkling import Wrinkling
-
             RegularisedSolver.blas_threads = None
             Wrinkling.compiled_linear_law = False
         row = solve_one(
