@@ -15,10 +15,13 @@ import numpy as np
 import pytest
 
 from wrinkle import compiled
+from wrinkle.assembly import SparsityPattern, chunk_colouring
 from wrinkle.case import read_case
 from wrinkle.element import element_stiffness, nodal_forces, strain_displacement
+from wrinkle.kinematics import deformation_gradient, element_coordinates, right_cauchy_green
 from wrinkle.loads import pressure_forces, subtract_pressure_stiffness
 from wrinkle.materials import StVenantKirchhoff
+from wrinkle.mesh import rectangle
 from wrinkle.wrinkling import Wrinkling, WrinklingError
 
 needs_numba = pytest.mark.skipif(not compiled.installed(), reason="numba not installed")
@@ -71,10 +74,12 @@ def test_used_on_large_meshes_unless_switched(monkeypatch):
 
 
 @needs_numba
-def test_airbag_evaluation_same_with_and_without_compiled_kernels(monkeypatch):
+@pytest.mark.parametrize("n", [8, 40])
+def test_airbag_evaluation_same_with_and_without_compiled_kernels(monkeypatch, n):
     """Forces, assembled stiffness and energy of the airbag partly inflated (taut, wrinkled
-    and slack elements, follower pressure) agree to round-off."""
-    model = read_case(AIRBAG, overrides={"mesh": {"rectangle": {"nx": 8, "ny": 8}}}).model
+    and slack elements, follower pressure) agree to round-off; on 8 x 8 squares the compiled
+    assembly has one chunk of elements, on 40 x 40 (3,200 triangles) four, in colours."""
+    model = read_case(AIRBAG, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}}).model
     X = model.mesh.nodes
     side = X[:, 0].max()
     bulge = 0.05 * np.cos(0.5 * np.pi * X[:, 0] / side) * np.cos(0.5 * np.pi * X[:, 1] / side)
@@ -275,3 +280,133 @@ def test_asymmetry_equals_numpy_norms():
     difference, norm = compiled.asymmetry(data, transpose)
     assert difference == pytest.approx(np.linalg.norm(data - data[transpose]), rel=1e-12)
     assert norm == pytest.approx(np.linalg.norm(data), rel=1e-12)
+
+
+def shuffled_mesh_triangles(n: int, seed: int) -> tuple[np.ndarray, int]:
+    """The triangles of an n x n square mesh, in random order with each one's nodes turned
+    at random (so that chunks of consecutive elements are scattered over the mesh), and the
+    node count."""
+    mesh = rectangle(1.0, 1.0, n, n)
+    rng = np.random.default_rng(seed)
+    triangles = mesh.triangles[rng.permutation(mesh.n_elements)]
+    turns = rng.integers(0, 3, triangles.shape[0])
+    rows = np.arange(triangles.shape[0])[:, None]
+    return triangles[rows, (np.arange(3) + turns[:, None]) % 3], mesh.n_nodes
+
+
+@pytest.mark.parametrize("shuffled", [False, True])
+def test_chunk_colouring_puts_no_shared_node_in_one_colour(shuffled):
+    """Every chunk once; chunks of one colour share no node; a mesh numbered row by row
+    needs few colours, a shuffled one more."""
+    if shuffled:
+        triangles, n_nodes = shuffled_mesh_triangles(40, seed=3)
+    else:
+        mesh = rectangle(1.0, 1.0, 40, 40)
+        triangles, n_nodes = mesh.triangles, mesh.n_nodes
+    chunk_start, chunk_order, colour_start = chunk_colouring(triangles, n_nodes, chunk=100)
+    n_chunks = chunk_start.size - 1
+    assert chunk_start[0] == 0 and chunk_start[-1] == triangles.shape[0]
+    assert np.all(np.diff(chunk_start) > 0)
+    np.testing.assert_array_equal(np.sort(chunk_order), np.arange(n_chunks))
+    for colour in range(colour_start.size - 1):
+        nodes = [
+            np.unique(triangles[chunk_start[k] : chunk_start[k + 1]])
+            for k in chunk_order[colour_start[colour] : colour_start[colour + 1]]
+        ]
+        every = np.concatenate(nodes)
+        assert np.unique(every).size == every.size, f"colour {colour} shares a node"
+    colours = colour_start.size - 1
+    assert colours <= (n_chunks if shuffled else 4), colours
+
+
+@needs_numba
+@pytest.mark.parametrize("shuffled", [False, True])
+def test_assembled_stiffness_equals_element_matrices_scattered(shuffled):
+    """The fused, coloured assembly equals the element matrices of ``element_stiffness``
+    minus the pressure stiffness, scattered by np.bincount, on the kept rows and columns;
+    the other entries are left as they were."""
+    triangles, n_nodes = shuffled_mesh_triangles(24, seed=5)
+    if not shuffled:
+        mesh = rectangle(1.0, 1.0, 24, 24)
+        triangles, n_nodes = mesh.triangles, mesh.n_nodes
+    m = triangles.shape[0]
+    pattern = SparsityPattern(triangles, n_nodes)
+    area, F, grad, tangent, stress = random_element_data(m, seed=7)
+    rng = np.random.default_rng(8)
+    x = rng.normal(size=(m, 3, 3))
+    pressure = np.where(rng.random(m) < 0.5, 0.0, rng.normal(size=m))
+    free = rng.random(pattern.n_dofs) < 0.8
+    kept = free[pattern.element_dofs]
+    K = element_stiffness(area, strain_displacement(F, grad), tangent, grad, stress)
+    subtract_pressure_stiffness(K, x, pressure)
+    K = K * (kept[:, :, None] & kept[:, None, :])
+    before = rng.normal(size=pattern.nnz)
+    expected = before + pattern.assemble_data(K)
+    data = before.copy()
+    colouring = chunk_colouring(triangles, n_nodes, chunk=64)
+    compiled.assemble_stiffness(
+        data, pattern.element_to_data, area, F, grad, tangent, stress, x, pressure, colouring, kept
+    )
+    np.testing.assert_allclose(data, expected, rtol=1e-13, atol=1e-13 * np.abs(expected).max())
+
+
+@needs_numba
+def test_strain_and_coordinate_kernels_equal_numpy_bit_for_bit():
+    """F, C and the element coordinates of the compiled kernels are NumPy's exactly."""
+    triangles, n_nodes = shuffled_mesh_triangles(12, seed=9)
+    rng = np.random.default_rng(10)
+    nodes, u = rng.normal(size=(n_nodes, 3)), rng.normal(size=(n_nodes, 3))
+    x = compiled.element_coordinates(nodes, u, triangles)
+    np.testing.assert_array_equal(x, element_coordinates(nodes + u, triangles))
+    grad = rng.normal(size=(triangles.shape[0], 3, 2))
+    F, C = compiled.deformation_gradient(x, grad)
+    F_numpy = deformation_gradient(x, grad)
+    np.testing.assert_array_equal(F, F_numpy)
+    np.testing.assert_array_equal(C, right_cauchy_green(F_numpy))
+
+
+@needs_numba
+def test_gather_scatter_and_shift_kernels_equal_numpy():
+    """put, take, any_nonzero and the regularised sum equal their NumPy forms exactly."""
+    rng = np.random.default_rng(12)
+    data = rng.normal(size=1000)
+    positions = rng.choice(1000, 300, replace=False)
+    np.testing.assert_array_equal(compiled.take(data, positions), data[positions])
+    changed = data.copy()
+    compiled.put(changed, positions, 0.0)
+    expected = data.copy()
+    expected[positions] = 0.0
+    np.testing.assert_array_equal(changed, expected)
+    assert not compiled.any_nonzero(changed, positions)
+    changed[positions[7]] = np.nan
+    assert compiled.any_nonzero(changed, positions)
+    assert compiled.any_nonzero(data, positions)
+    other = rng.normal(size=1000)
+    shifted = data + 0.37 * other
+    shifted[positions] += 2.5
+    np.testing.assert_array_equal(compiled.shifted_sum(data, other, 0.37, positions, 2.5), shifted)
+
+
+@needs_numba
+def test_evaluation_keeping_constraints_or_lifted_same_with_and_without_kernels(monkeypatch):
+    """The tangent with its constrained rows and columns kept (the sensitivities) and the
+    residual linearised at a lift of the prescribed components are the NumPy ones: there
+    the compiled assembly adds every row and column, not only the free ones."""
+    model = read_case(AIRBAG, overrides={"mesh": {"rectangle": {"nx": 24, "ny": 24}}}).model
+    X = model.mesh.nodes
+    u = np.column_stack([-0.01 * X[:, 0], -0.005 * X[:, 1], 0.02 * X[:, 0] * X[:, 1]]).ravel()
+    u[model.constrained] = 0.0
+    lift = np.where(model.constrained, 1e-3, 0.0)
+    results = {}
+    for switch in ("0", "1"):
+        monkeypatch.setenv("WRINKLE_NUMBA", switch)
+        model.assign_material(model.materials[0])
+        problem = model.discretise().at(1.0)
+        results[switch] = (
+            problem.evaluate(u, keep_constrained=True).stiffness,
+            problem.evaluate(u, lift=lift).residual,
+        )
+    (K_numpy, r_numpy), (K, r) = results["0"], results["1"]
+    assert np.any(K_numpy.data[model.discretise().pattern.constraint_positions(model.constrained)])
+    np.testing.assert_allclose(K.data, K_numpy.data, rtol=0, atol=1e-12 * abs(K_numpy.data).max())
+    np.testing.assert_allclose(r, r_numpy, rtol=0, atol=1e-12 * np.abs(r_numpy).max())

@@ -17,9 +17,11 @@ import scipy.sparse as sp
 
 from wrinkle import compiled as kernels
 
-__all__ = ["DOFS_PER_NODE", "SparsityPattern"]
+__all__ = ["DOFS_PER_NODE", "SparsityPattern", "chunk_colouring"]
 
 DOFS_PER_NODE = 3
+#: elements per chunk of ``chunk_colouring``
+COLOURING_CHUNK = 1024
 
 
 def _sorted_unique(values: np.ndarray) -> np.ndarray:
@@ -29,6 +31,39 @@ def _sorted_unique(values: np.ndarray) -> np.ndarray:
     first[:1] = True
     np.not_equal(values[1:], values[:-1], out=first[1:])
     return values[first]
+
+
+def chunk_colouring(
+    triangles: np.ndarray, n_nodes: int, chunk: int = COLOURING_CHUNK
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Chunks of ``chunk`` consecutive elements, coloured so that no two chunks of one colour
+    share a node: their element matrices can then be added into the global matrix in
+    parallel, colour after colour (``wrinkle.compiled.assemble_stiffness``). Greedy colouring
+    in chunk order; a mesh numbered so that consecutive elements lie close together (the
+    generators, gmsh) needs few colours (3-4 on the structured rectangle), a randomly numbered
+    one up to one a chunk (then nothing runs in parallel, but the sums are still right).
+
+    triangles (n, 3) node indices. Returns (chunk_start, chunk_order, colour_start):
+    chunk k is elements chunk_start[k]:chunk_start[k + 1], (n_chunks + 1,); chunk_order
+    (n_chunks,) lists the chunks colour by colour; colour c's chunks are
+    chunk_order[colour_start[c]:colour_start[c + 1]]. All int64."""
+    n = triangles.shape[0]
+    n_chunks = max((n + chunk - 1) // chunk, 1)
+    chunk_of = np.arange(n) // chunk
+    incidence = sp.csr_matrix(
+        (np.ones(3 * n), (np.repeat(chunk_of, 3), np.asarray(triangles).ravel())),
+        shape=(n_chunks, n_nodes),
+    )
+    touching = (incidence @ incidence.T).tocsr()  # chunks that share a node
+    colour = np.full(n_chunks, -1, dtype=np.int64)
+    for k in range(n_chunks):  # once per mesh, over chunks (not elements)
+        taken = colour[touching.indices[touching.indptr[k] : touching.indptr[k + 1]]]
+        free = np.setdiff1d(np.arange(taken.size + 1), taken)
+        colour[k] = free[0]
+    chunk_order = np.argsort(colour, kind="stable").astype(np.int64)
+    colour_start = np.concatenate(([0], np.cumsum(np.bincount(colour)))).astype(np.int64)
+    chunk_start = np.minimum(np.arange(n_chunks + 1, dtype=np.int64) * chunk, n)
+    return chunk_start, chunk_order, colour_start
 
 
 class SparsityPattern:
@@ -104,9 +139,18 @@ class SparsityPattern:
             + j
         )
         self.element_to_data = element_to_data.astype(index_dtype).reshape(n, 81)
+        self._colouring: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         nodes = np.arange(n_nodes)
         diagonal_block = np.searchsorted(keys, nodes * (n_nodes + 1))
         self.diagonal = self._position(nodes[:, None], diagonal_block[:, None], i, i).reshape(-1)
+
+    @property
+    def colouring(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``chunk_colouring`` of the elements, made at the first use."""
+        if self._colouring is None:
+            triangles = self.element_dofs[:, ::DOFS_PER_NODE] // DOFS_PER_NODE
+            self._colouring = chunk_colouring(triangles, self.n_nodes)
+        return self._colouring
 
     def _position(self, row_node, block, i, j):
         """CSR data index of entry (3 row_node + i, 3 col + j) of node-pair block ``block``."""

@@ -30,6 +30,18 @@ installed (extra ``fast``); NumPy versions of the same formulas are the fallback
   ``SparsityPattern.add_to_data`` forms with ``np.bincount``.
 - ``asymmetry``: |A - A^T| and |A| of the symmetry check of a matrix with follower loads
   (``wrinkle.solvers.linear.SymmetryCheck``) in one parallel pass over its values.
+- ``assemble_stiffness``: the element matrices (``element_stiffness`` minus the pressure
+  stiffness) formed and added into the CSR data at once, without an (m, 9, 9) array, in
+  parallel over chunks of elements that share no node (``wrinkle.assembly.chunk_colouring``),
+  leaving out the rows and columns of constrained components that the caller zeroes: what
+  a solve's evaluation does (``wrinkle.system.StepProblem.evaluate``); the element stiffness
+  and its serial scatter took 25 ms of an evaluation of the 320 x 160 sheared rectangle,
+  this 7.5 ms (docs/notes/2026-12-evaluation-speed.md).
+- ``deformation_gradient`` (F and C in one pass) and ``element_coordinates``: the NumPy
+  formulas element by element in parallel, bit for bit.
+- ``put``, ``take``, ``any_nonzero`` and ``shifted_sum``: the passes over a matrix's values
+  between an evaluation and a factorisation (constrained rows zeroed, the free block and the
+  upper triangle taken, K + theta M), in parallel and without NumPy's temporaries.
 
 Measured by ``benchmarks/kernels.py`` (README, Performance), 10^5 / 10^6 elements, before
 ``svk_wrinkling`` and the parallel loops: forces and stiffness of all elements 0.109 -> 0.088
@@ -41,8 +53,9 @@ the NumPy results to round-off; ``nodal_forces``, ``subtract_pressure_stiffness`
 same order). ``svk_wrinkling`` follows the NumPy code's formulas step by step, but its
 sums of squares and Numba's ``arctan2`` differ from NumPy's in the last bit.
 
-``svk_wrinkling``, ``element_stiffness`` and ``asymmetry`` run on all of Numba's threads (one
-a core, or ``NUMBA_NUM_THREADS``), the others on one. The parallel loops gain only where
+``svk_wrinkling``, ``element_stiffness``, ``asymmetry``, ``assemble_stiffness`` and the
+kernels after it run on all of Numba's threads (one a core, or ``NUMBA_NUM_THREADS``), the
+others on one. The parallel loops gain only where
 nothing else keeps the cores busy: during a solve, OpenBLAS's idle threads are kept from
 spinning (``wrinkle.threads``).
 
@@ -67,10 +80,18 @@ __all__ = [
     "MIN_ELEMENTS",
     "asymmetry",
     "add_pressure_forces",
+    "assemble_stiffness",
+    "deformation_gradient",
+    "element_coordinates",
     "element_stiffness",
     "enabled",
     "installed",
     "nodal_forces",
+    "put",
+    "serves_matrix",
+    "shifted_sum",
+    "take",
+    "any_nonzero",
     "scatter_add",
     "subtract_pressure_stiffness",
     "svk_wrinkling",
@@ -100,6 +121,13 @@ def enabled(n_elements: int) -> bool:
     return setting == "1" or n_elements >= MIN_ELEMENTS
 
 
+def serves_matrix(n_unknowns: int) -> bool:
+    """Whether the compiled kernels serve the matrices of n_unknowns unknowns: those of a
+    mesh of about 2/3 as many triangles (3 unknowns a node, twice as many triangles as
+    nodes; ``enabled``)."""
+    return enabled(2 * n_unknowns // 3)
+
+
 def _element_stiffness(area, F, shape_gradient, tangent, stress, out):
     """out[e] = A0 (B^T D B + G (x) I3) for each element e; shapes as ``element_stiffness``.
     In parallel over chunks of _CHUNK elements, each with its own B and D B."""
@@ -108,11 +136,12 @@ def _element_stiffness(area, F, shape_gradient, tangent, stress, out):
         B = np.empty((3, 9))
         DB = np.empty((3, 9))
         for e in range(chunk * _CHUNK, min(n, (chunk + 1) * _CHUNK)):
-            _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, out)
+            _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, out[e])
 
 
 def _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, out):
-    """out[e] of ``_element_stiffness``, with B and DB (3, 9) as scratch."""
+    """out (9, 9) = element e's matrix of ``_element_stiffness``, with B and DB (3, 9) as
+    scratch."""
     a = area[e]
     for k in range(3):  # B of wrinkle.element.strain_displacement
         g0, g1 = shape_gradient[e, k, 0], shape_gradient[e, k, 1]
@@ -130,7 +159,7 @@ def _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, ou
     for r in range(9):
         b0, b1, b2 = B[0, r], B[1, r], B[2, r]
         for c in range(9):
-            out[e, r, c] = b0 * DB[0, c] + b1 * DB[1, c] + b2 * DB[2, c]
+            out[r, c] = b0 * DB[0, c] + b1 * DB[1, c] + b2 * DB[2, c]
     N00, N11, N01 = a * stress[e, 0, 0], a * stress[e, 1, 1], a * stress[e, 0, 1]
     for k in range(3):  # geometric part, G_kl = grad psi_k . A0 N grad psi_l
         v0 = N00 * shape_gradient[e, k, 0] + N01 * shape_gradient[e, k, 1]
@@ -138,26 +167,113 @@ def _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, ou
         for m in range(3):
             G = shape_gradient[e, m, 0] * v0 + shape_gradient[e, m, 1] * v1
             for i in range(3):
-                out[e, 3 * k + i, 3 * m + i] += G
+                out[3 * k + i, 3 * m + i] += G
 
 
 def _subtract_pressure_stiffness(K, x, pressure):
     """K[e] -= d f / d u of the follower pressure, in place; the loop of
     ``wrinkle.loads.subtract_pressure_stiffness``, one element at a time."""
     for e in range(K.shape[0]):
-        q = pressure[e] / 6.0
-        for l in range(3):  # w_l = x_(l+2) - x_(l+1), nodes counted mod 3
-            a0 = q * (x[e, (l + 2) % 3, 0] - x[e, (l + 1) % 3, 0])
-            a1 = q * (x[e, (l + 2) % 3, 1] - x[e, (l + 1) % 3, 1])
-            a2 = q * (x[e, (l + 2) % 3, 2] - x[e, (l + 1) % 3, 2])
-            c = 3 * l
-            for r in range(0, 9, 3):
-                K[e, r, c + 1] += a2
-                K[e, r, c + 2] -= a1
-                K[e, r + 1, c] -= a2
-                K[e, r + 1, c + 2] += a0
-                K[e, r + 2, c] += a1
-                K[e, r + 2, c + 1] -= a0
+        _subtract_pressure_at(K[e], x, e, pressure[e])
+
+
+def _subtract_pressure_at(K, x, e, pressure):
+    """K (9, 9) -= d f / d u of the follower pressure on element e, x (m, 3 nodes, 3)."""
+    q = pressure / 6.0
+    for l in range(3):  # w_l = x_(l+2) - x_(l+1), nodes counted mod 3
+        a0 = q * (x[e, (l + 2) % 3, 0] - x[e, (l + 1) % 3, 0])
+        a1 = q * (x[e, (l + 2) % 3, 1] - x[e, (l + 1) % 3, 1])
+        a2 = q * (x[e, (l + 2) % 3, 2] - x[e, (l + 1) % 3, 2])
+        c = 3 * l
+        for r in range(0, 9, 3):
+            K[r, c + 1] += a2
+            K[r, c + 2] -= a1
+            K[r + 1, c] -= a2
+            K[r + 1, c + 2] += a0
+            K[r + 2, c] += a1
+            K[r + 2, c + 1] -= a0
+
+
+def _assemble_stiffness(
+    data, positions, area, F, shape_gradient, tangent, stress, x, pressure, colouring, kept
+):
+    """data[positions[e, q]] += K_e.ravel()[q] for every element e and every entry q = 9 r + c
+    with kept[e, r] and kept[e, c], K_e its matrix of ``_element_stiffness`` minus, where
+    pressure[e] != 0, the follower pressure's load stiffness (``_subtract_pressure_at``),
+    formed and added at once (no (m, 9, 9) array). colouring = (chunk_start, chunk_order,
+    colour_start): the chunks of elements chunk_start[k]:chunk_start[k + 1] listed colour by
+    colour, chunk_order[colour_start[c]:colour_start[c + 1]] those of colour c, which share
+    no node: each colour's chunks are added in parallel, the colours one after the other."""
+    chunk_start, chunk_order, colour_start = colouring
+    for colour in range(colour_start.size - 1):
+        for k in prange(colour_start[colour], colour_start[colour + 1]):
+            chunk = chunk_order[k]
+            B = np.empty((3, 9))
+            DB = np.empty((3, 9))
+            K = np.empty((9, 9))
+            for e in range(chunk_start[chunk], chunk_start[chunk + 1]):
+                _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, K)
+                if pressure[e] != 0.0:
+                    _subtract_pressure_at(K, x, e, pressure[e])
+                for r in range(9):
+                    if kept[e, r]:
+                        for c in range(9):
+                            if kept[e, c]:
+                                data[positions[e, 9 * r + c]] += K[r, c]
+
+
+def _deformation_gradient(x, shape_gradient, F, C):
+    """F (m, 3, 2) and C = F^T F (m, 2, 2) from the node coordinates x (m, 3 nodes, 3) by the
+    formulas of ``wrinkle.kinematics.deformation_gradient`` and ``right_cauchy_green``, in
+    their order of operations; in parallel."""
+    for e in prange(x.shape[0]):
+        for i in range(3):
+            x1 = x[e, 0, i]
+            edge2, edge3 = x[e, 1, i] - x1, x[e, 2, i] - x1
+            for a in range(2):
+                F[e, i, a] = edge2 * shape_gradient[e, 1, a] + edge3 * shape_gradient[e, 2, a]
+        C[e, 0, 0] = F[e, 0, 0] * F[e, 0, 0] + F[e, 1, 0] * F[e, 1, 0] + F[e, 2, 0] * F[e, 2, 0]
+        C[e, 1, 1] = F[e, 0, 1] * F[e, 0, 1] + F[e, 1, 1] * F[e, 1, 1] + F[e, 2, 1] * F[e, 2, 1]
+        C[e, 0, 1] = F[e, 0, 0] * F[e, 0, 1] + F[e, 1, 0] * F[e, 1, 1] + F[e, 2, 0] * F[e, 2, 1]
+        C[e, 1, 0] = C[e, 0, 1]
+
+
+def _element_coordinates(nodes, u, triangles, x):
+    """x[e, k] = nodes[triangles[e, k]] + u[triangles[e, k]], (m, 3, 3); in parallel."""
+    for e in prange(triangles.shape[0]):
+        for k in range(3):
+            node = triangles[e, k]
+            for i in range(3):
+                x[e, k, i] = nodes[node, i] + u[node, i]
+
+
+def _put(data, positions, value):
+    """data[positions] = value, in parallel."""
+    for j in prange(positions.shape[0]):
+        data[positions[j]] = value
+
+
+def _take(data, positions, out):
+    """out = data[positions], in parallel."""
+    for j in prange(positions.shape[0]):
+        out[j] = data[positions[j]]
+
+
+def _any_nonzero(data, positions):
+    """Whether data[positions] has an entry that is not zero (NaN counts), in parallel."""
+    count = 0
+    for j in prange(positions.shape[0]):
+        if data[positions[j]] != 0.0:
+            count += 1
+    return count > 0
+
+
+def _shifted_sum(data, other, factor, diagonal, shift, out):
+    """out = data + factor other, then out[diagonal] += shift; in parallel."""
+    for j in prange(data.shape[0]):
+        out[j] = data[j] + factor * other[j]
+    for j in prange(diagonal.shape[0]):
+        out[diagonal[j]] += shift
 
 
 def _nodal_forces(area, F, shape_gradient, stress, out):
@@ -458,6 +574,7 @@ def _make_kernels() -> None:
     import numba
 
     global prange, _wrinkled_tangent_at, _element_stiffness_at, _svk_state_at
+    global _subtract_pressure_at
     prange = numba.prange
     jit = numba.njit(cache=True, boundscheck=False)
     parallel = numba.njit(cache=True, boundscheck=False, parallel=True)
@@ -465,6 +582,7 @@ def _make_kernels() -> None:
     _wrinkled_tangent_at = jit(getattr(_wrinkled_tangent_at, "py_func", _wrinkled_tangent_at))
     _element_stiffness_at = jit(getattr(_element_stiffness_at, "py_func", _element_stiffness_at))
     _svk_state_at = jit(getattr(_svk_state_at, "py_func", _svk_state_at))
+    _subtract_pressure_at = jit(getattr(_subtract_pressure_at, "py_func", _subtract_pressure_at))
     kernels: dict[str, Callable[..., None]] = {
         "asymmetry": parallel(_asymmetry),
         "svk_wrinkling": numba.njit(
@@ -476,6 +594,13 @@ def _make_kernels() -> None:
         "add_pressure_forces": jit(_add_pressure_forces),
         "wrinkled_tangent": jit(_wrinkled_tangent),
         "scatter_add": jit(_scatter_add),
+        "assemble_stiffness": parallel(_assemble_stiffness),
+        "deformation_gradient": parallel(_deformation_gradient),
+        "element_coordinates": parallel(_element_coordinates),
+        "put": parallel(_put),
+        "take": parallel(_take),
+        "any_nonzero": parallel(_any_nonzero),
+        "shifted_sum": parallel(_shifted_sum),
     }
     _kernels.update(kernels)
 
@@ -565,6 +690,111 @@ def scatter_add(data: np.ndarray, positions: np.ndarray, matrices: np.ndarray) -
     indices, matrices (m, 9, 9); repeated positions are summed."""
     values = np.ascontiguousarray(matrices).reshape(positions.shape[0], positions.shape[1])
     _compiled("scatter_add")(data, np.ascontiguousarray(positions), values)
+
+
+def assemble_stiffness(
+    data: np.ndarray,
+    positions: np.ndarray,
+    area: np.ndarray,
+    F: np.ndarray,
+    shape_gradient: np.ndarray,
+    tangent: np.ndarray,
+    stress: np.ndarray,
+    x: np.ndarray,
+    pressure: np.ndarray,
+    colouring: tuple[np.ndarray, np.ndarray, np.ndarray],
+    kept: np.ndarray,
+) -> None:
+    """Add the tangent stiffness of m elements to the CSR data (nnz,) in place, formed and
+    summed element by element in parallel without an (m, 9, 9) array: A0 (B^T D B + G (x) I3)
+    of ``element_stiffness`` minus the follower pressure's load stiffness
+    (``subtract_pressure_stiffness``) where the pressure is not zero. positions (m, 81) the
+    elements' CSR data indices (``SparsityPattern.element_to_data``), area (m,), F and
+    shape_gradient (m, 3, 2), tangent D (m, 3, 3), stress N (m, 2, 2), x (m, 3 nodes, 3)
+    current coordinates, pressure (m,); colouring: chunks of elements that share no node
+    (``wrinkle.assembly.chunk_colouring``); kept (m, 9) bool: the element degrees of freedom
+    whose rows and columns are added (the others' entries are left as they are: a caller
+    that zeroes the constrained rows and columns need not add them). The sums differ from a
+    serial scatter's only in their order (round-off)."""
+    _compiled("assemble_stiffness")(
+        data,
+        np.ascontiguousarray(positions),
+        np.ascontiguousarray(area),
+        np.ascontiguousarray(F),
+        np.ascontiguousarray(shape_gradient),
+        np.ascontiguousarray(tangent),
+        np.ascontiguousarray(stress),
+        np.ascontiguousarray(x),
+        np.ascontiguousarray(pressure, dtype=float),
+        colouring,
+        np.ascontiguousarray(kept, dtype=np.bool_),
+    )
+
+
+def deformation_gradient(
+    x: np.ndarray, shape_gradient: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """F (m, 3, 2) and C = F^T F (m, 2, 2) of m triangles from their current node
+    coordinates x (m, 3 nodes, 3) and shape_gradient (m, 3, 2), in parallel; the values of
+    ``wrinkle.kinematics.deformation_gradient`` and ``right_cauchy_green``, bit for bit."""
+    m = x.shape[0]
+    F, C = np.empty((m, 3, 2)), np.empty((m, 2, 2))
+    _compiled("deformation_gradient")(
+        np.ascontiguousarray(x), np.ascontiguousarray(shape_gradient), F, C
+    )
+    return F, C
+
+
+def element_coordinates(nodes: np.ndarray, u: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Current node coordinates of each triangle, (m, 3 nodes, 3): nodes (n, 3) + u (n, 3) at
+    triangles (m, 3), in parallel (``wrinkle.kinematics.element_coordinates``)."""
+    x = np.empty((triangles.shape[0], 3, 3))
+    _compiled("element_coordinates")(
+        np.ascontiguousarray(nodes, dtype=float),
+        np.ascontiguousarray(u, dtype=float),
+        np.ascontiguousarray(triangles),
+        x,
+    )
+    return x
+
+
+def put(data: np.ndarray, positions: np.ndarray, value: float) -> None:
+    """data[positions] = value in place, in parallel; positions (k,) integers."""
+    _compiled("put")(data, np.ascontiguousarray(positions), float(value))
+
+
+def take(data: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """data[positions], (k,), in parallel; data (n,) float, positions (k,) integers."""
+    out = np.empty(positions.shape[0])
+    _compiled("take")(np.ascontiguousarray(data, dtype=float), np.ascontiguousarray(positions), out)
+    return out
+
+
+def any_nonzero(data: np.ndarray, positions: np.ndarray) -> bool:
+    """np.any(data[positions]) without the (k,) copy, in parallel."""
+    return bool(
+        _compiled("any_nonzero")(
+            np.ascontiguousarray(data, dtype=float), np.ascontiguousarray(positions)
+        )
+    )
+
+
+def shifted_sum(
+    data: np.ndarray, other: np.ndarray, factor: float, diagonal: np.ndarray, shift: float
+) -> np.ndarray:
+    """data + factor other, then shift added at the positions diagonal (no repeats): the values
+    of a regularised matrix K + theta M (``wrinkle.solvers.newton``), bit for bit as NumPy
+    forms them, in parallel. data, other (nnz,) float; diagonal (k,) integers."""
+    out = np.empty(data.shape[0])
+    _compiled("shifted_sum")(
+        np.ascontiguousarray(data, dtype=float),
+        np.ascontiguousarray(other, dtype=float),
+        float(factor),
+        np.ascontiguousarray(diagonal),
+        float(shift),
+        out,
+    )
+    return out
 
 
 def svk_wrinkling(

@@ -154,31 +154,37 @@ class MembraneElements:
         self.compiled = compiled
 
     def evaluate(
-        self, x_elements: np.ndarray, stiffness: bool = True, stiffness_sink=None
+        self,
+        x_elements: np.ndarray,
+        stiffness: bool = True,
+        stiffness_sink=None,
+        matrices: bool = True,
     ) -> ElementResult:
         """Forces (and stiffness) at current node coordinates x_elements, (n, 3, 3).
 
         Elements are evaluated block by block (results do not depend on the blocks). With
         ``stiffness_sink(elements, K)`` the stiffness of each block (elements: a slice of this
         group's rows, K: (m, 9, 9), overwritten afterwards) goes to the sink, to be assembled
-        at once, and the result holds none: no (n, 9, 9) array on a large mesh. Raises
-        WrinklingError listing every element whose wrinkling conditions could not be solved.
+        at once, and the result holds none: no (n, 9, 9) array on a large mesh. With
+        ``matrices`` False the element matrices are not formed at all: the result holds the
+        material tangent (``response.tangent``) and F, from which the caller forms and adds
+        them itself (``wrinkle.compiled.assemble_stiffness``). Raises WrinklingError listing
+        every element whose wrinkling conditions could not be solved.
         """
         g = self.geometry
         n = g.n_elements
+        with_matrices = stiffness and matrices
         if n <= _BLOCK:
-            F = deformation_gradient(x_elements, g.shape_gradient)
-            response = self.material.response(
-                right_cauchy_green(F), tangent=stiffness, compiled=self.compiled
-            )
+            F, C = self._strain(x_elements, g.shape_gradient)
+            response = self.material.response(C, tangent=stiffness, compiled=self.compiled)
             forces, K = self._forces_and_stiffness(
-                F, slice(0, n), response, stiffness, sink=stiffness_sink
+                F, slice(0, n), response, with_matrices, sink=stiffness_sink
             )
             return ElementResult(F, response, forces, K, g.area * response.energy)
 
         F = np.empty((n, 3, 2))
         forces = np.empty((n, 9))
-        K = np.empty((n, 9, 9)) if stiffness and stiffness_sink is None else None
+        K = np.empty((n, 9, 9)) if with_matrices and stiffness_sink is None else None
         response = WrinklingResponse(
             state=np.empty(n, dtype=np.int8),
             stress=np.empty((n, 2, 2)),
@@ -192,11 +198,9 @@ class MembraneElements:
         failed = []
         for start in range(0, n, _BLOCK):
             block = slice(start, min(start + _BLOCK, n))
-            F_block = deformation_gradient(x_elements[block], g.shape_gradient[block])
+            F_block, C_block = self._strain(x_elements[block], g.shape_gradient[block])
             try:
-                r = self.material.response(
-                    right_cauchy_green(F_block), tangent=stiffness, compiled=self.compiled
-                )
+                r = self.material.response(C_block, tangent=stiffness, compiled=self.compiled)
             except WrinklingError as error:
                 failed.append(error.elements + start)
                 continue
@@ -210,7 +214,7 @@ class MembraneElements:
                 F_block,
                 block,
                 r,
-                stiffness,
+                with_matrices,
                 forces[block],
                 None if K is None else K[block],
                 stiffness_sink,
@@ -218,6 +222,15 @@ class MembraneElements:
         if failed:
             raise WrinklingError(np.concatenate(failed))
         return ElementResult(F, response, forces, K, g.area * response.energy)
+
+    def _strain(
+        self, x_elements: np.ndarray, shape_gradient: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """F (m, 3, 2) and C = F^T F (m, 2, 2) at the coordinates x_elements (m, 3, 3)."""
+        if self.compiled:
+            return kernels.deformation_gradient(x_elements, shape_gradient)
+        F = deformation_gradient(x_elements, shape_gradient)
+        return F, right_cauchy_green(F)
 
     def _forces_and_stiffness(
         self, F, elements, response, stiffness, forces=None, K=None, sink=None

@@ -509,6 +509,10 @@ class DiscreteSystem:
     # -- evaluation ---------------------------------------------------------------------
     def element_coordinates(self, u: np.ndarray) -> np.ndarray:
         """Current node coordinates of every triangle at displacements u, (n_elements, 3, 3)."""
+        if self.compiled:
+            return compiled.element_coordinates(
+                self.mesh.nodes, u.reshape(-1, 3), self.mesh.triangles
+            )
         return element_coordinates(self.mesh.nodes + u.reshape(-1, 3), self.mesh.triangles)
 
     def evaluate_elements(
@@ -517,13 +521,16 @@ class DiscreteSystem:
         stiffness: bool = True,
         stiffness_sink: StiffnessSink | None = None,
         x_elements: np.ndarray | None = None,
+        matrices: bool = True,
     ) -> ElementResult:
         """Element forces, stiffness and states at displacements u, (n_dofs,).
 
         stiffness_sink(elements, K): if given, receives the stiffness block by block (mesh
         element indices or a slice, (m, 9, 9)) instead of the result holding all of it.
-        x_elements: ``element_coordinates(u)`` if the caller has them. Raises
-        EvaluationFailure naming the elements whose wrinkling conditions could not be solved.
+        matrices: False to form no element matrices, only the material tangent the result
+        holds (``assemble_stiffness`` forms and adds them). x_elements:
+        ``element_coordinates(u)`` if the caller has them. Raises EvaluationFailure naming
+        the elements whose wrinkling conditions could not be solved.
         """
         x = self.element_coordinates(u) if x_elements is None else x_elements
         groups = self.groups
@@ -541,6 +548,7 @@ class DiscreteSystem:
                         x if len(groups) == 1 else x[index],
                         stiffness=stiffness,
                         stiffness_sink=sink,
+                        matrices=matrices,
                     )
                 )
             except WrinklingError as error:  # group rows -> mesh elements
@@ -657,6 +665,39 @@ class DiscreteSystem:
             else:
                 np.add.at(K, elements, k)
         return forces, K
+
+    def assemble_stiffness(
+        self,
+        data: np.ndarray,
+        result: ElementResult,
+        x: np.ndarray,
+        pressures: np.ndarray,
+        kept: np.ndarray,
+    ) -> None:
+        """Form the element stiffness matrices from the material tangent of ``result`` (an
+        ``evaluate_elements`` with ``matrices=False``, mesh order) and add them to the CSR
+        data (nnz,) in place, the pressure's load stiffness subtracted (``pressures``
+        (n_elements,), ``pressure_at``); x (n_elements, 3, 3) the current coordinates; kept
+        (n_elements, 9) bool, the element dofs whose rows and columns are added (all, or the
+        free ones where the caller zeroes the constrained rows and columns). The compiled
+        kernel, in parallel over chunks of elements that share no node
+        (``SparsityPattern.colouring``)."""
+        tangent = result.response.tangent
+        if tangent is None:
+            raise ValueError("the element result holds no material tangent")
+        compiled.assemble_stiffness(
+            data,
+            self.pattern.element_to_data,
+            self.geometry.area,
+            result.deformation_gradient,
+            self.geometry.shape_gradient,
+            tangent,
+            result.response.stress,
+            x,
+            pressures,
+            self.pattern.colouring,
+            kept,
+        )
 
     def subtract_pressure_stiffness(
         self, K: np.ndarray, x: np.ndarray, elements: np.ndarray | slice, pressures: np.ndarray
@@ -931,9 +972,18 @@ class StepProblem:
             system.constraint_data()
         )
         self.timer = Stopwatch()  # a path follower shares one across the steps
+        self._kept: dict[bool, np.ndarray] = {}  # ``_kept_dofs``
         # the force scale of the prescribed motion (DiscreteSystem.motion_force), made at the
         # first evaluation unless given
         self.motion_force: float | None = None
+
+    def _kept_dofs(self, everything: bool) -> np.ndarray:
+        """(n_elements, 9) bool: the element dofs whose stiffness rows and columns are
+        assembled, every one or the free ones (``DiscreteSystem.assemble_stiffness``)."""
+        if everything not in self._kept:
+            dofs = self.system.pattern.element_dofs
+            self._kept[everything] = np.ones(dofs.shape, bool) if everything else self.free[dofs]
+        return self._kept[everything]
 
     def evaluate(
         self,
@@ -970,14 +1020,24 @@ class StepProblem:
             with timer.part(ASSEMBLY):
                 pattern.add_to_data(data, elements, -K, compiled=system.compiled)
 
+        # compiled kernels: the element matrices formed and added in one parallel pass
+        fused = stiffness and system.compiled
         with timer.part(ELEMENTS):
             result = system.evaluate_elements(
                 u,
                 stiffness=stiffness,
-                stiffness_sink=add_element_stiffness if stiffness else None,
+                stiffness_sink=add_element_stiffness if stiffness and not fused else None,
                 x_elements=x,
+                matrices=not fused,
             )
         with timer.part(ASSEMBLY):
+            if fused:
+                # the constrained rows and columns are zeroed below: not added at all, unless
+                # they are kept or the lift needs them
+                everything = keep_constrained or lift is not None
+                system.assemble_stiffness(
+                    data, result, x, self.pressures, self._kept_dofs(everything)
+                )
             internal = pattern.assemble_vector(result.forces)
             other_energy = system.add_bending(u, internal, data if stiffness else None)
             other_energy += system.add_cables(u, internal, data if stiffness else None)
@@ -1017,7 +1077,10 @@ class StepProblem:
                 if lift is not None:
                     coupling = pattern.matrix(data) @ lift
                     residual = np.where(self.free, residual - coupling, 0.0)
-                if not keep_constrained:
+                if not keep_constrained and system.compiled:
+                    compiled.put(data, self._constraint_positions, 0.0)
+                    compiled.put(data, self._constrained_diagonal, 1.0)
+                elif not keep_constrained:
                     data[self._constraint_positions] = 0.0
                     data[self._constrained_diagonal] = 1.0
                 K = pattern.matrix(data)

@@ -171,9 +171,8 @@ class SymmetryCheck:
             self._transpose = positions.data - 1 if same else None
         if self._transpose is None:
             return False
-        # one pass, no temporaries, where the kernels serve the mesh: about 2/3 as many
-        # triangles as unknowns (3 a node, twice as many triangles as nodes)
-        if compiled.enabled(2 * A.shape[0] // 3):
+        # one pass, no temporaries, where the kernels serve the mesh
+        if compiled.serves_matrix(A.shape[0]):
             difference, norm = compiled.asymmetry(A.data, self._transpose)
         else:
             difference = float(np.linalg.norm(A.data - A.data[self._transpose]))
@@ -252,15 +251,30 @@ class FreeBlock:
         if self._layout is None:
             return None
         positions, off, held_diagonal, indptr, indices = self._layout
-        if np.any(A.data[off]):
+        if _any_nonzero(A, off):
             return None
         held = A.data[held_diagonal]
         if not np.all(held != 0):
             return None
         n = indptr.size - 1
-        block = sp.csr_matrix((A.data[positions], indices, indptr), shape=(n, n))
+        block = sp.csr_matrix((_take(A, positions), indices, indptr), shape=(n, n))
         block.has_sorted_indices = True
         return block, held
+
+
+def _take(A: sp.csr_matrix, positions: np.ndarray) -> np.ndarray:
+    """A.data[positions]; in parallel where the compiled kernels serve A's size."""
+    if compiled.serves_matrix(A.shape[0]) and not np.iscomplexobj(A.data):
+        return compiled.take(A.data, positions)
+    return A.data[positions]
+
+
+def _any_nonzero(A: sp.csr_matrix, positions: np.ndarray) -> bool:
+    """np.any(A.data[positions]); in parallel, without the copy, where the compiled kernels
+    serve A's size."""
+    if compiled.serves_matrix(A.shape[0]) and not np.iscomplexobj(A.data):
+        return compiled.any_nonzero(A.data, positions)
+    return bool(np.any(A.data[positions]))
 
 
 def upper_triangle_positions(A: sp.csr_matrix):
@@ -356,7 +370,7 @@ class Pardiso:
             if not self._upper_pattern.same(A) or upper is None:
                 upper = self._upper = upper_triangle_positions(A)
             positions, indptr, indices = upper
-            M, mtype = sp.csr_matrix((A.data[positions], indices, indptr), shape=A.shape), -2
+            M, mtype = sp.csr_matrix((_take(A, positions), indices, indptr), shape=A.shape), -2
             if definite and self.cholesky:
                 if self._cholesky_pause > 0:
                     self._cholesky_pause -= 1

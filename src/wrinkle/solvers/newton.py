@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from wrinkle import compiled
 from wrinkle.solvers.base import (
     Evaluation,
     Problem,
@@ -73,8 +74,12 @@ class RegularisedNewton(RegularisedSolver):
             diagonal = ev.metric[positions[free]]
             mean = float(np.mean(diagonal)) if diagonal.size else 0.0
             self._metric_scale = self._scale / mean if mean > 0.0 else 0.0
-        data = K.data + (theta * self._metric_scale) * ev.metric
-        data[positions[free]] += _IDENTITY_SHARE * theta * self._scale
+        factor, shift = theta * self._metric_scale, _IDENTITY_SHARE * theta * self._scale
+        if compiled.serves_matrix(K.shape[0]) and not np.iscomplexobj(K.data):
+            data = compiled.shifted_sum(K.data, ev.metric, factor, positions[free], shift)
+        else:
+            data = K.data + factor * ev.metric
+            data[positions[free]] += shift
         return sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
 
     def trial_step(
