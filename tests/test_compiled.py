@@ -74,12 +74,14 @@ def test_used_on_large_meshes_unless_switched(monkeypatch):
 
 
 @needs_numba
-@pytest.mark.parametrize("n", [8, 40])
-def test_airbag_evaluation_same_with_and_without_compiled_kernels(monkeypatch, n):
+@pytest.mark.parametrize("n, bending", [(8, False), (40, False), (40, True)])
+def test_airbag_evaluation_same_with_and_without_compiled_kernels(monkeypatch, n, bending):
     """Forces, assembled stiffness and energy of the airbag partly inflated (taut, wrinkled
-    and slack elements, follower pressure) agree to round-off; on 8 x 8 squares the compiled
-    assembly has one chunk of elements, on 40 x 40 (3,200 triangles) four, in colours."""
-    model = read_case(AIRBAG, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}}).model
+    and slack elements, follower pressure; with the bending stiffness too) agree to
+    round-off; on 8 x 8 squares the compiled assembly has one chunk of elements, on 40 x 40
+    (3,200 triangles) four, in colours."""
+    overrides = {"mesh": {"rectangle": {"nx": n, "ny": n}}, "material": {"bending": bending}}
+    model = read_case(AIRBAG, overrides=overrides).model
     X = model.mesh.nodes
     side = X[:, 0].max()
     bulge = 0.05 * np.cos(0.5 * np.pi * X[:, 0] / side) * np.cos(0.5 * np.pi * X[:, 1] / side)
@@ -345,7 +347,17 @@ def test_assembled_stiffness_equals_element_matrices_scattered(shuffled):
     data = before.copy()
     colouring = chunk_colouring(triangles, n_nodes, chunk=64)
     compiled.assemble_stiffness(
-        data, pattern.element_to_data, area, F, grad, tangent, stress, x, pressure, colouring, kept
+        data,
+        (pattern.element_block_base, pattern.element_row_step),
+        area,
+        F,
+        grad,
+        tangent,
+        stress,
+        x,
+        pressure,
+        colouring,
+        kept,
     )
     np.testing.assert_allclose(data, expected, rtol=1e-13, atol=1e-13 * np.abs(expected).max())
 
@@ -367,7 +379,8 @@ def test_strain_and_coordinate_kernels_equal_numpy_bit_for_bit():
 
 @needs_numba
 def test_gather_scatter_and_shift_kernels_equal_numpy():
-    """put, take, any_nonzero and the regularised sum equal their NumPy forms exactly."""
+    """put, take, any_nonzero, add_unique and the regularised sum equal their NumPy forms
+    exactly."""
     rng = np.random.default_rng(12)
     data = rng.normal(size=1000)
     positions = rng.choice(1000, 300, replace=False)
@@ -381,6 +394,11 @@ def test_gather_scatter_and_shift_kernels_equal_numpy():
     changed[positions[7]] = np.nan
     assert compiled.any_nonzero(changed, positions)
     assert compiled.any_nonzero(data, positions)
+    added = data.copy()
+    compiled.add_unique(added, positions, np.arange(300.0))
+    expected = data.copy()
+    expected[positions] += np.arange(300.0)
+    np.testing.assert_array_equal(added, expected)
     other = rng.normal(size=1000)
     shifted = data + 0.37 * other
     shifted[positions] += 2.5

@@ -39,9 +39,10 @@ installed (extra ``fast``); NumPy versions of the same formulas are the fallback
   this 7.5 ms (docs/notes/2026-12-evaluation-speed.md).
 - ``deformation_gradient`` (F and C in one pass) and ``element_coordinates``: the NumPy
   formulas element by element in parallel, bit for bit.
-- ``put``, ``take``, ``any_nonzero`` and ``shifted_sum``: the passes over a matrix's values
-  between an evaluation and a factorisation (constrained rows zeroed, the free block and the
-  upper triangle taken, K + theta M), in parallel and without NumPy's temporaries.
+- ``put``, ``take``, ``any_nonzero``, ``shifted_sum`` and ``add_unique``: the passes over a
+  matrix's values between an evaluation and a factorisation (constrained rows zeroed, the
+  free block and the upper triangle taken, K + theta M, the constant bending stiffness
+  added), in parallel and without NumPy's temporaries.
 
 Measured by ``benchmarks/kernels.py`` (README, Performance), 10^5 / 10^6 elements, before
 ``svk_wrinkling`` and the parallel loops: forces and stiffness of all elements 0.109 -> 0.088
@@ -80,6 +81,7 @@ __all__ = [
     "MIN_ELEMENTS",
     "asymmetry",
     "add_pressure_forces",
+    "add_unique",
     "assemble_stiffness",
     "deformation_gradient",
     "element_coordinates",
@@ -195,10 +197,12 @@ def _subtract_pressure_at(K, x, e, pressure):
 
 
 def _assemble_stiffness(
-    data, positions, area, F, shape_gradient, tangent, stress, x, pressure, colouring, kept
+    data, base, step, area, F, shape_gradient, tangent, stress, x, pressure, colouring, kept
 ):
-    """data[positions[e, q]] += K_e.ravel()[q] for every element e and every entry q = 9 r + c
-    with kept[e, r] and kept[e, c], K_e its matrix of ``_element_stiffness`` minus, where
+    """data[p] += K_e[r, c] for every element e and every entry r = 3 k + i, c = 3 l + j
+    with kept[e, r] and kept[e, c], at p = base[e, 3 k + l] + step[e, k] i + j (the compact
+    positions of ``wrinkle.assembly.SparsityPattern``); K_e its matrix of
+    ``_element_stiffness`` minus, where
     pressure[e] != 0, the follower pressure's load stiffness (``_subtract_pressure_at``),
     formed and added at once (no (m, 9, 9) array). colouring = (chunk_start, chunk_order,
     colour_start): the chunks of elements chunk_start[k]:chunk_start[k + 1] listed colour by
@@ -215,11 +219,16 @@ def _assemble_stiffness(
                 _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, K)
                 if pressure[e] != 0.0:
                     _subtract_pressure_at(K, x, e, pressure[e])
-                for r in range(9):
-                    if kept[e, r]:
-                        for c in range(9):
-                            if kept[e, c]:
-                                data[positions[e, 9 * r + c]] += K[r, c]
+                for k in range(3):
+                    for i in range(3):
+                        r = 3 * k + i
+                        if kept[e, r]:
+                            row = step[e, k] * i
+                            for l in range(3):
+                                p = base[e, 3 * k + l] + row
+                                for j in range(3):
+                                    if kept[e, 3 * l + j]:
+                                        data[p + j] += K[r, 3 * l + j]
 
 
 def _deformation_gradient(x, shape_gradient, F, C):
@@ -251,6 +260,12 @@ def _put(data, positions, value):
     """data[positions] = value, in parallel."""
     for j in prange(positions.shape[0]):
         data[positions[j]] = value
+
+
+def _add_unique(data, positions, values):
+    """data[positions] += values for positions without repeats, in parallel."""
+    for j in prange(positions.shape[0]):
+        data[positions[j]] += values[j]
 
 
 def _take(data, positions, out):
@@ -599,6 +614,7 @@ def _make_kernels() -> None:
         "element_coordinates": parallel(_element_coordinates),
         "put": parallel(_put),
         "take": parallel(_take),
+        "add_unique": parallel(_add_unique),
         "any_nonzero": parallel(_any_nonzero),
         "shifted_sum": parallel(_shifted_sum),
     }
@@ -694,7 +710,7 @@ def scatter_add(data: np.ndarray, positions: np.ndarray, matrices: np.ndarray) -
 
 def assemble_stiffness(
     data: np.ndarray,
-    positions: np.ndarray,
+    positions: tuple[np.ndarray, np.ndarray],
     area: np.ndarray,
     F: np.ndarray,
     shape_gradient: np.ndarray,
@@ -708,17 +724,20 @@ def assemble_stiffness(
     """Add the tangent stiffness of m elements to the CSR data (nnz,) in place, formed and
     summed element by element in parallel without an (m, 9, 9) array: A0 (B^T D B + G (x) I3)
     of ``element_stiffness`` minus the follower pressure's load stiffness
-    (``subtract_pressure_stiffness``) where the pressure is not zero. positions (m, 81) the
-    elements' CSR data indices (``SparsityPattern.element_to_data``), area (m,), F and
+    (``subtract_pressure_stiffness``) where the pressure is not zero. positions: the
+    elements' CSR data indices in compact form, block bases (m, 9) and row steps (m, 3)
+    (``SparsityPattern.element_block_base``, ``element_row_step``), area (m,), F and
     shape_gradient (m, 3, 2), tangent D (m, 3, 3), stress N (m, 2, 2), x (m, 3 nodes, 3)
     current coordinates, pressure (m,); colouring: chunks of elements that share no node
     (``wrinkle.assembly.chunk_colouring``); kept (m, 9) bool: the element degrees of freedom
     whose rows and columns are added (the others' entries are left as they are: a caller
     that zeroes the constrained rows and columns need not add them). The sums differ from a
     serial scatter's only in their order (round-off)."""
+    base, step = positions
     _compiled("assemble_stiffness")(
         data,
-        np.ascontiguousarray(positions),
+        np.ascontiguousarray(base),
+        np.ascontiguousarray(step),
         np.ascontiguousarray(area),
         np.ascontiguousarray(F),
         np.ascontiguousarray(shape_gradient),
@@ -761,6 +780,14 @@ def element_coordinates(nodes: np.ndarray, u: np.ndarray, triangles: np.ndarray)
 def put(data: np.ndarray, positions: np.ndarray, value: float) -> None:
     """data[positions] = value in place, in parallel; positions (k,) integers."""
     _compiled("put")(data, np.ascontiguousarray(positions), float(value))
+
+
+def add_unique(data: np.ndarray, positions: np.ndarray, values: np.ndarray) -> None:
+    """data[positions] += values in place, in parallel: NumPy's fancy-indexed add, for
+    positions (k,) that hold no index twice (a repeat would race); values (k,)."""
+    _compiled("add_unique")(
+        data, np.ascontiguousarray(positions), np.ascontiguousarray(values, dtype=float)
+    )
 
 
 def take(data: np.ndarray, positions: np.ndarray) -> np.ndarray:

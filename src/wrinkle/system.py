@@ -687,7 +687,7 @@ class DiscreteSystem:
             raise ValueError("the element result holds no material tangent")
         compiled.assemble_stiffness(
             data,
-            self.pattern.element_to_data,
+            (self.pattern.element_block_base, self.pattern.element_row_step),
             self.geometry.area,
             result.deformation_gradient,
             self.geometry.shape_gradient,
@@ -886,7 +886,9 @@ class DiscreteSystem:
             return 0.0
         forces = self.bending.forces(u)
         internal += forces
-        if data is not None:
+        if data is not None and self.compiled:  # the positions hold no index twice
+            compiled.add_unique(data, self._bending_positions, self._bending_values)
+        elif data is not None:
             data[self._bending_positions] += self._bending_values
         return 0.5 * float(u @ forces)
 
