@@ -19,7 +19,7 @@ from wrinkle.assembly import SparsityPattern, chunk_colouring
 from wrinkle.case import read_case
 from wrinkle.element import element_stiffness, nodal_forces, strain_displacement
 from wrinkle.kinematics import deformation_gradient, element_coordinates, right_cauchy_green
-from wrinkle.loads import pressure_forces, subtract_pressure_stiffness
+from wrinkle.loads import pressure_forces, pressure_volume, subtract_pressure_stiffness
 from wrinkle.materials import StVenantKirchhoff
 from wrinkle.mesh import rectangle
 from wrinkle.wrinkling import Wrinkling, WrinklingError
@@ -428,3 +428,25 @@ def test_evaluation_keeping_constraints_or_lifted_same_with_and_without_kernels(
     assert np.any(K_numpy.data[model.discretise().pattern.constraint_positions(model.constrained)])
     np.testing.assert_allclose(K.data, K_numpy.data, rtol=0, atol=1e-12 * abs(K_numpy.data).max())
     np.testing.assert_allclose(r, r_numpy, rtol=0, atol=1e-12 * np.abs(r_numpy).max())
+
+
+@needs_numba
+def test_coloured_vector_assembly_and_pressure_work_equal_numpy():
+    """The global vector summed over coloured chunks equals np.bincount's; the pressure's
+    work equals p . pressure_volume; both to round-off (the order of the sums differs)."""
+    triangles, n_nodes = shuffled_mesh_triangles(24, seed=13)
+    pattern = SparsityPattern(triangles, n_nodes)
+    rng = np.random.default_rng(14)
+    values = rng.normal(size=(triangles.shape[0], 9))
+    expected = pattern.assemble_vector(values)
+    for colouring in (pattern.colouring, chunk_colouring(triangles, n_nodes, chunk=32)):
+        summed = compiled.assemble_vector(pattern.n_dofs, pattern.element_dofs, values, colouring)
+        np.testing.assert_allclose(summed, expected, rtol=0, atol=1e-13 * np.abs(expected).max())
+    np.testing.assert_allclose(
+        pattern.assemble_vector(values, compiled=True), expected, rtol=0, atol=1e-13
+    )
+    x = rng.normal(size=(500, 3, 3))
+    pressure = rng.normal(size=500)
+    assert compiled.pressure_work(x, pressure) == pytest.approx(
+        float(pressure @ pressure_volume(x)), rel=1e-12
+    )

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import wrinkle.compiled
 import wrinkle.element
 import wrinkle.wrinkling
 from wrinkle import NeoHookean, StVenantKirchhoff, rectangle
@@ -91,6 +92,38 @@ def test_fallback_finds_the_same_wrinkled_state(monkeypatch):
     np.testing.assert_array_equal(fallback.response.state, reference.response.state)
     np.testing.assert_allclose(fallback.forces, reference.forces, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(fallback.stiffness, reference.stiffness, rtol=1e-8, atol=1e-10)
+
+
+@pytest.mark.skipif(not wrinkle.compiled.installed(), reason="numba not installed")
+@pytest.mark.parametrize("matrices", [True, False])
+def test_compiled_response_runs_in_one_block(monkeypatch, matrices):
+    """With the compiled St Venant-Kirchhoff response the elements are evaluated in one
+    block whatever the block size (the kernels make no temporaries), to the NumPy results;
+    without matrices the result holds the material tangent and no element matrices."""
+    elements, x = mixed_case(MATERIALS["svk-transverse"])
+    reference = elements.evaluate(x)
+    monkeypatch.setattr(wrinkle.element, "_BLOCK", 50)
+    monkeypatch.setattr(wrinkle.element, "KERNEL_BLOCK", 16)
+    compiled = MembraneElements(elements.geometry, elements.material, compiled=True)
+    batches = []
+    response = Wrinkling.response
+
+    def counted(self, C, **options):
+        batches.append(C.shape[0])
+        return response(self, C, **options)
+
+    monkeypatch.setattr(Wrinkling, "response", counted)
+    result = compiled.evaluate(x, matrices=matrices)
+    assert batches[0] == x.shape[0]
+    assert (result.stiffness is None) == (not matrices)
+    np.testing.assert_array_equal(result.response.state, reference.response.state)
+    scale = np.abs(reference.forces).max()
+    np.testing.assert_allclose(result.forces, reference.forces, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(
+        result.response.tangent, reference.response.tangent, rtol=1e-12, atol=1e-14
+    )
+    if matrices:
+        np.testing.assert_allclose(result.stiffness, reference.stiffness, rtol=1e-12, atol=1e-13)
 
 
 @pytest.mark.parametrize("block", [None, 50])

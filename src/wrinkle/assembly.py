@@ -169,8 +169,13 @@ class SparsityPattern:
         start = self._block_ptr[row_node]
         return 9 * start + 3 * i * self._degree[row_node] + 3 * (block - start) + j
 
-    def assemble_vector(self, element_vectors: np.ndarray) -> np.ndarray:
-        """Sum (n, 9) element vectors into a global (n_dofs,) vector."""
+    def assemble_vector(self, element_vectors: np.ndarray, compiled: bool = False) -> np.ndarray:
+        """Sum (n, 9) element vectors into a global (n_dofs,) vector; with ``compiled``, in
+        parallel over the coloured chunks of elements (``wrinkle.compiled.assemble_vector``)."""
+        if compiled:
+            return kernels.assemble_vector(
+                self.n_dofs, self.element_dofs, element_vectors, self.colouring
+            )
         return np.bincount(
             self.element_dofs.ravel(), weights=element_vectors.ravel(), minlength=self.n_dofs
         )

@@ -37,8 +37,11 @@ installed (extra ``fast``); NumPy versions of the same formulas are the fallback
   a solve's evaluation does (``wrinkle.system.StepProblem.evaluate``); the element stiffness
   and its serial scatter took 25 ms of an evaluation of the 320 x 160 sheared rectangle,
   this 7.5 ms (docs/notes/2026-12-evaluation-speed.md).
+- ``assemble_vector``: the element forces summed into the global vector over the same
+  coloured chunks, in parallel (``SparsityPattern.assemble_vector``).
 - ``deformation_gradient`` (F and C in one pass) and ``element_coordinates``: the NumPy
-  formulas element by element in parallel, bit for bit.
+  formulas element by element in parallel, bit for bit; ``pressure_work``: the pressure's
+  work p V (``wrinkle.loads.pressure_volume``) summed in parallel.
 - ``put``, ``take``, ``any_nonzero``, ``shifted_sum`` and ``add_unique``: the passes over a
   matrix's values between an evaluation and a factorisation (constrained rows zeroed, the
   free block and the upper triangle taken, K + theta M, the constant bending stiffness
@@ -54,10 +57,10 @@ the NumPy results to round-off; ``nodal_forces``, ``subtract_pressure_stiffness`
 same order). ``svk_wrinkling`` follows the NumPy code's formulas step by step, but its
 sums of squares and Numba's ``arctan2`` differ from NumPy's in the last bit.
 
-``svk_wrinkling``, ``element_stiffness``, ``asymmetry``, ``assemble_stiffness`` and the
-kernels after it run on all of Numba's threads (one a core, or ``NUMBA_NUM_THREADS``), the
-others on one. The parallel loops gain only where
-nothing else keeps the cores busy: during a solve, OpenBLAS's idle threads are kept from
+``svk_wrinkling``, ``element_stiffness``, ``nodal_forces``, ``asymmetry``,
+``assemble_stiffness`` and the kernels after it run on all of Numba's threads (one a core,
+or ``NUMBA_NUM_THREADS``), the others on one. The parallel loops gain only where nothing
+else keeps the cores busy: during a solve, OpenBLAS's idle threads are kept from
 spinning (``wrinkle.threads``).
 
 Numba is imported, and the kernels compiled (a few seconds, then cached on disk,
@@ -83,12 +86,14 @@ __all__ = [
     "add_pressure_forces",
     "add_unique",
     "assemble_stiffness",
+    "assemble_vector",
     "deformation_gradient",
     "element_coordinates",
     "element_stiffness",
     "enabled",
     "installed",
     "nodal_forces",
+    "pressure_work",
     "put",
     "serves_matrix",
     "shifted_sum",
@@ -231,6 +236,30 @@ def _assemble_stiffness(
                                         data[p + j] += K[r, 3 * l + j]
 
 
+def _assemble_vector(out, dofs, values, colouring):
+    """out[dofs[e, q]] += values[e, q] for every element e, (m, 9) each, in place: the chunks
+    of elements of one colour (``_assemble_stiffness``) in parallel, the colours in turn."""
+    chunk_start, chunk_order, colour_start = colouring
+    for colour in range(colour_start.size - 1):
+        for k in prange(colour_start[colour], colour_start[colour + 1]):
+            chunk = chunk_order[k]
+            for e in range(chunk_start[chunk], chunk_start[chunk + 1]):
+                for q in range(dofs.shape[1]):
+                    out[dofs[e, q]] += values[e, q]
+
+
+def _pressure_work(x, pressure):
+    """sum_e pressure[e] x1 . (x2 x x3) / 6 over the triangles x (m, 3 nodes, 3): the work
+    p V of ``wrinkle.loads.pressure_volume``; in parallel."""
+    total = 0.0
+    for e in prange(x.shape[0]):
+        c0 = x[e, 1, 1] * x[e, 2, 2] - x[e, 1, 2] * x[e, 2, 1]
+        c1 = x[e, 1, 2] * x[e, 2, 0] - x[e, 1, 0] * x[e, 2, 2]
+        c2 = x[e, 1, 0] * x[e, 2, 1] - x[e, 1, 1] * x[e, 2, 0]
+        total += pressure[e] * ((x[e, 0, 0] * c0 + x[e, 0, 1] * c1 + x[e, 0, 2] * c2) / 6.0)
+    return total
+
+
 def _deformation_gradient(x, shape_gradient, F, C):
     """F (m, 3, 2) and C = F^T F (m, 2, 2) from the node coordinates x (m, 3 nodes, 3) by the
     formulas of ``wrinkle.kinematics.deformation_gradient`` and ``right_cauchy_green``, in
@@ -293,8 +322,8 @@ def _shifted_sum(data, other, factor, diagonal, shift, out):
 
 def _nodal_forces(area, F, shape_gradient, stress, out):
     """out[e, 3 k + i] = (A0 F N grad psi_k)_i for each element e; shapes as
-    ``wrinkle.element.nodal_forces``."""
-    for e in range(area.shape[0]):
+    ``wrinkle.element.nodal_forces``; in parallel."""
+    for e in prange(area.shape[0]):
         a = area[e]
         N00, N11, N01 = a * stress[e, 0, 0], a * stress[e, 1, 1], a * stress[e, 0, 1]
         for i in range(3):
@@ -605,7 +634,7 @@ def _make_kernels() -> None:
         )(_svk_wrinkling),
         "element_stiffness": parallel(_element_stiffness),
         "subtract_pressure_stiffness": jit(_subtract_pressure_stiffness),
-        "nodal_forces": jit(_nodal_forces),
+        "nodal_forces": parallel(_nodal_forces),
         "add_pressure_forces": jit(_add_pressure_forces),
         "wrinkled_tangent": jit(_wrinkled_tangent),
         "scatter_add": jit(_scatter_add),
@@ -613,6 +642,8 @@ def _make_kernels() -> None:
         "deformation_gradient": parallel(_deformation_gradient),
         "element_coordinates": parallel(_element_coordinates),
         "put": parallel(_put),
+        "assemble_vector": parallel(_assemble_vector),
+        "pressure_work": parallel(_pressure_work),
         "take": parallel(_take),
         "add_unique": parallel(_add_unique),
         "any_nonzero": parallel(_any_nonzero),
@@ -747,6 +778,32 @@ def assemble_stiffness(
         np.ascontiguousarray(pressure, dtype=float),
         colouring,
         np.ascontiguousarray(kept, dtype=np.bool_),
+    )
+
+
+def assemble_vector(
+    n: int,
+    dofs: np.ndarray,
+    values: np.ndarray,
+    colouring: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> np.ndarray:
+    """The (n,) global vector of the element vectors values (m, 9) at the degrees of freedom
+    dofs (m, 9), summed in parallel over chunks of elements that share no node (colouring:
+    ``wrinkle.assembly.chunk_colouring``); np.bincount's sums up to their order."""
+    out = np.zeros(n)
+    _compiled("assemble_vector")(
+        out, np.ascontiguousarray(dofs), np.ascontiguousarray(values, dtype=float), colouring
+    )
+    return out
+
+
+def pressure_work(x: np.ndarray, pressure: np.ndarray) -> float:
+    """sum pressure . ``wrinkle.loads.pressure_volume``(x) for triangles x (m, 3 nodes, 3)
+    and pressure (m,), in parallel without temporaries (its sums in another order)."""
+    return float(
+        _compiled("pressure_work")(
+            np.ascontiguousarray(x, dtype=float), np.ascontiguousarray(pressure, dtype=float)
+        )
     )
 
 

@@ -174,7 +174,8 @@ class MembraneElements:
         g = self.geometry
         n = g.n_elements
         with_matrices = stiffness and matrices
-        if n <= _BLOCK:
+        # in one block where that costs no temporaries: a compiled response
+        if n <= _BLOCK or (self.compiled and self.material.has_compiled_response):
             F, C = self._strain(x_elements, g.shape_gradient)
             response = self.material.response(C, tangent=stiffness, compiled=self.compiled)
             forces, K = self._forces_and_stiffness(
@@ -244,8 +245,10 @@ class MembraneElements:
             forces = np.empty((m, 9))
         if stiffness and K is None:
             K = np.empty((min(m, KERNEL_BLOCK) if sink else m, 9, 9))
-        for start in range(0, m, KERNEL_BLOCK):
-            sub = slice(start, min(start + KERNEL_BLOCK, m))
+        # without matrices, the compiled forces in one call (no temporaries)
+        step = max(m, 1) if self.compiled and not stiffness else KERNEL_BLOCK
+        for start in range(0, m, step):
+            sub = slice(start, min(start + step, m))
             mesh_sub = slice(elements.start + sub.start, elements.start + sub.stop)
             area, grad = g.area[mesh_sub], g.shape_gradient[mesh_sub]
             F_sub, stress = F[sub], response.stress[sub]

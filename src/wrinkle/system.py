@@ -831,7 +831,10 @@ class DiscreteSystem:
         if loaded is None:
             return 0.0
         x = self._loaded_coordinates(u, loaded, x_elements)
-        return float(self.pressure_at(pressure_factor)[loaded] @ pressure_volume(x))
+        pressure = self.pressure_at(pressure_factor)[loaded]
+        if self.compiled:
+            return compiled.pressure_work(x, pressure)
+        return float(pressure @ pressure_volume(x))
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
         """Global internal force vector f* (membrane, bending and cables), (n_dofs,)."""
@@ -1040,7 +1043,7 @@ class StepProblem:
                 system.assemble_stiffness(
                     data, result, x, self.pressures, self._kept_dofs(everything)
                 )
-            internal = pattern.assemble_vector(result.forces)
+            internal = pattern.assemble_vector(result.forces, compiled=system.compiled)
             other_energy = system.add_bending(u, internal, data if stiffness else None)
             other_energy += system.add_cables(u, internal, data if stiffness else None)
         external = self.forces

@@ -252,7 +252,7 @@ class Wrinkling:
         Numba kernels (the same formulas): the whole response of a St Venant-Kirchhoff law
         (``wrinkle.compiled.svk_wrinkling``; the elements it leaves, by the code below), the
         wrinkled elements' tangent of any other law."""
-        if compiled and self.compiled_linear_law and self._linear_law is not None:
+        if compiled and self.has_compiled_response:
             return self._compiled_response(C, tangent)
         n = C.shape[0]
         plain = self.material.response(C, tangent=tangent)
@@ -322,6 +322,13 @@ class Wrinkling:
                     c_w, s_w, b_w, modified.stress, tangent_of(modified)
                 )
         return WrinklingResponse(state, stress, stiffness, thickness, phi, b, energy)
+
+    @property
+    def has_compiled_response(self) -> bool:
+        """Whether ``response(compiled=True)`` runs as one compiled kernel, element by element
+        without temporaries (a plain St Venant-Kirchhoff law): a batch of any size then
+        costs no more memory than its results."""
+        return self.compiled_linear_law and self._linear_law is not None
 
     def _compiled_response(self, C: np.ndarray, tangent: bool) -> WrinklingResponse:
         """``response`` of a St Venant-Kirchhoff law by ``wrinkle.compiled.svk_wrinkling``;
