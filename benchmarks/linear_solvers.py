@@ -52,9 +52,12 @@ def coarse_solution(n: int = 32):
     return RegularGridInterpolator((grid, grid), values)
 
 
-def airbag_matrix(n: int, interpolant):
-    """Shifted tangent A (CSR), right-hand side b and symmetry flag of the n x n airbag."""
-    model = read_case(CASE, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}}).model
+def airbag_matrix(n: int, interpolant, bending: bool = False):
+    """Shifted tangent A (CSR), right-hand side b and symmetry flag of the n x n airbag; with
+    ``bending``, of the airbag with the sheet's bending stiffness (``[material] bending``),
+    whose matrix couples each node with its neighbours' neighbours too."""
+    overrides = {"mesh": {"rectangle": {"nx": n, "ny": n}}, "material": {"bending": bending}}
+    model = read_case(CASE, overrides=overrides).model
     X = model.mesh.nodes
     u = interpolant(np.column_stack([X[:, 1], X[:, 0]])).ravel()
     problem = model.discretise().at(1.0)
@@ -116,6 +119,7 @@ def main() -> None:
     )
     parser.add_argument("--solvers", nargs="+", default=[*LINEAR_SOLVERS, "pardiso/LU"])
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--bending", action="store_true", help="the airbag with bending")
     parser.add_argument("--csv", default="linear_solvers.csv")
     args = parser.parse_args()
     interpolant = coarse_solution()
@@ -126,7 +130,7 @@ def main() -> None:
     )
     print(header)
     for n in args.sizes:
-        A, b, symmetric, n_elements = airbag_matrix(n, interpolant)
+        A, b, symmetric, n_elements = airbag_matrix(n, interpolant, args.bending)
         for name in args.solvers:
             try:
                 row = measure(name, A, b, symmetric, args.repeat)

@@ -57,7 +57,7 @@ __all__ = [
 logger = logging.getLogger("wrinkle.solver")
 
 Solve = Callable[[np.ndarray], np.ndarray]
-AUTO_PARDISO_DOFS = 20_000  # from benchmarks/linear_solvers.py: PARDISO wins above this size
+AUTO_PARDISO_DOFS = 2_000  # benchmarks/linear_solvers.py: PARDISO wins above this size
 
 
 class _FreedWithTheObject:
