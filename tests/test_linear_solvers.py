@@ -17,8 +17,10 @@ from wrinkle.solvers import make_solver
 from wrinkle.solvers.base import shifted
 from wrinkle.solvers.linear import (
     AUTO_PARDISO_DOFS,
+    AUTO_PARDISO_ONE_OFF_DOFS,
     LINEAR_SOLVERS,
     FreeBlock,
+    Pardiso,
     SuperLU,
     SymmetryCheck,
     diagonal_positions,
@@ -193,6 +195,13 @@ def test_superlu_solves_complex_and_reports_singular():
 
 def test_auto_and_unknown_names(monkeypatch):
     assert isinstance(make_linear_solver("auto", 100), SuperLU)
+    # a matrix factorised once takes SuperLU up to the larger threshold
+    assert isinstance(make_linear_solver("auto", AUTO_PARDISO_DOFS, one_off=True), SuperLU)
+    if installed("pardiso"):
+        assert isinstance(make_linear_solver("auto", AUTO_PARDISO_DOFS), Pardiso)
+        assert isinstance(
+            make_linear_solver("auto", AUTO_PARDISO_ONE_OFF_DOFS, one_off=True), Pardiso
+        )
     with pytest.raises(ValueError, match="unknown linear solver 'umfpack'"):
         make_linear_solver("umfpack")
     with pytest.raises(ValueError, match="unknown linear solver"):

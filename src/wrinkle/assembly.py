@@ -40,7 +40,7 @@ def chunk_colouring(
     share a node: their element matrices can then be added into the global matrix in
     parallel, colour after colour (``wrinkle.compiled.assemble_stiffness``). Greedy colouring
     in chunk order; a mesh numbered so that consecutive elements lie close together (the
-    generators, gmsh) needs few colours (3-4 on the structured rectangle), a randomly numbered
+    generators, gmsh) needs few colours (3-5 on the structured rectangle), a randomly numbered
     one up to one a chunk (then nothing runs in parallel, but the sums are still right).
 
     triangles (n, 3) node indices. Returns (chunk_start, chunk_order, colour_start):

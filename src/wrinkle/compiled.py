@@ -835,7 +835,8 @@ def element_coordinates(nodes: np.ndarray, u: np.ndarray, triangles: np.ndarray)
 
 
 def put(data: np.ndarray, positions: np.ndarray, value: float) -> None:
-    """data[positions] = value in place, in parallel; positions (k,) integers."""
+    """data[positions] = value in place, in parallel; positions (k,) integers within data
+    (not checked: the kernels run without bounds checks)."""
     _compiled("put")(data, np.ascontiguousarray(positions), float(value))
 
 
@@ -848,7 +849,8 @@ def add_unique(data: np.ndarray, positions: np.ndarray, values: np.ndarray) -> N
 
 
 def take(data: np.ndarray, positions: np.ndarray) -> np.ndarray:
-    """data[positions], (k,), in parallel; data (n,) float, positions (k,) integers."""
+    """data[positions], (k,), in parallel; data (n,) float, positions (k,) integers within
+    data (not checked)."""
     out = np.empty(positions.shape[0])
     _compiled("take")(np.ascontiguousarray(data, dtype=float), np.ascontiguousarray(positions), out)
     return out
@@ -868,7 +870,10 @@ def shifted_sum(
 ) -> np.ndarray:
     """data + factor other, then shift added at the positions diagonal (no repeats): the values
     of a regularised matrix K + theta M (``wrinkle.solvers.newton``), bit for bit as NumPy
-    forms them, in parallel. data, other (nnz,) float; diagonal (k,) integers."""
+    forms them, in parallel. data, other (nnz,) float; diagonal (k,) integers within nnz (not
+    checked: the kernels run without bounds checks)."""
+    if data.shape != other.shape:
+        raise ValueError(f"shifted_sum: {data.shape} values against {other.shape}")
     out = np.empty(data.shape[0])
     _compiled("shifted_sum")(
         np.ascontiguousarray(data, dtype=float),

@@ -241,7 +241,7 @@ def find_form(
             A = L[free][:, free].tocsr()
             A.sort_indices()
             rhs = -np.asarray(L[free][:, fixed] @ target[np.ix_(fixed, components)])
-            solver = make_linear_solver(linear_solver, free.size)
+            solver = make_linear_solver(linear_solver, free.size, one_off=True)
             try:
                 solve = solver.factorise(A, True)
                 if solve is None:

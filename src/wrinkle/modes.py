@@ -186,7 +186,7 @@ def solve_eigenproblem(
             nearest = np.argsort(values.real, kind="stable")[:count]
         values, vectors = values[nearest], vectors[:, nearest]
     else:
-        linear = make_linear_solver(linear_solver, n)
+        linear = make_linear_solver(linear_solver, n, one_off=True)
         if hasattr(linear, "refinement"):
             linear.refinement = PARDISO_REFINEMENT
         try:

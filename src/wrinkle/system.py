@@ -453,7 +453,7 @@ class DiscreteSystem:
                 # a shift of 10^-12 of the diagonal gives it the extension zero
                 shift = 1e-12 * float(np.abs(L_ff.diagonal()).max())
                 L_ff = (L_ff + sp.identity(L_ff.shape[0], format="csr") * shift).tocsr()
-                linear = make_linear_solver("auto", L_ff.shape[0])
+                linear = make_linear_solver("auto", L_ff.shape[0], one_off=True)
                 solve = linear.factorise(L_ff, True)
                 if solve is None:
                     raise EvaluationFailure("the prescribed motion's force scale: singular L")

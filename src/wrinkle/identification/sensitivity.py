@@ -354,7 +354,7 @@ def state_sensitivities(
         keep @ (K.T if not evaluation.symmetric else K) @ keep + sp.diags((~active).astype(float))
     ).tocsr()
     reduced.sort_indices()
-    backend = make_linear_solver(linear_solver, system.n_dofs)
+    backend = make_linear_solver(linear_solver, system.n_dofs, one_off=True)
     try:
         solve = backend.factorise(reduced, bool(evaluation.symmetric))
         if solve is None:

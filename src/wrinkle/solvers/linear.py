@@ -20,8 +20,9 @@ positions of the diagonal) and factorises only the values again.
   (``pyamg``, installed separately), symmetric positive definite matrices only; an
   iterative, inexact solve.
 
-``make_linear_solver("auto", n_dofs)`` takes PARDISO for large problems when it is installed,
-SuperLU otherwise.
+``make_linear_solver("auto", n_dofs)`` takes PARDISO when it is installed, from 2,000
+unknowns for the solvers' factorisations (many of one pattern) and from 20,000 for a matrix
+factorised once; SuperLU otherwise.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from wrinkle import compiled
 
 __all__ = [
     "AUTO_PARDISO_DOFS",
+    "AUTO_PARDISO_ONE_OFF_DOFS",
     "INSTALL_HINTS",
     "LINEAR_SOLVERS",
     "AlgebraicMultigrid",
@@ -57,7 +59,12 @@ __all__ = [
 logger = logging.getLogger("wrinkle.solver")
 
 Solve = Callable[[np.ndarray], np.ndarray]
-AUTO_PARDISO_DOFS = 2_000  # benchmarks/linear_solvers.py: PARDISO wins above this size
+# benchmarks/linear_solvers.py: PARDISO's refactorisation (its ordering reused) beats SuperLU's
+# factorisation above AUTO_PARDISO_DOFS unknowns; for a matrix factorised once, its first
+# factorisation only above AUTO_PARDISO_ONE_OFF_DOFS (and SuperLU reports an exactly singular
+# matrix, which PARDISO's pivot perturbation may not)
+AUTO_PARDISO_DOFS = 2_000
+AUTO_PARDISO_ONE_OFF_DOFS = 20_000
 
 
 class _FreedWithTheObject:
@@ -496,12 +503,14 @@ INSTALL_HINTS = {
 }
 
 
-def make_linear_solver(name: str = "auto", n_dofs: int = 0):
+def make_linear_solver(name: str = "auto", n_dofs: int = 0, one_off: bool = False):
     """The back-end called ``name`` (one of LINEAR_SOLVERS, or "auto": PARDISO from
-    AUTO_PARDISO_DOFS unknowns if pypardiso is installed, else SuperLU). ValueError for an
-    unknown name; ImportError saying how to install a back-end that is not installed."""
+    AUTO_PARDISO_DOFS unknowns if pypardiso is installed, or from AUTO_PARDISO_ONE_OFF_DOFS
+    for a caller that factorises one matrix and no more of its pattern (``one_off``), else
+    SuperLU). ValueError for an unknown name; ImportError saying how to install a back-end
+    that is not installed."""
     if name == "auto":
-        if n_dofs >= AUTO_PARDISO_DOFS:
+        if n_dofs >= (AUTO_PARDISO_ONE_OFF_DOFS if one_off else AUTO_PARDISO_DOFS):
             try:
                 return Pardiso()
             except (ImportError, OSError) as error:  # the extra is optional: fall back
