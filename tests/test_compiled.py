@@ -42,6 +42,19 @@ def random_element_data(m: int, seed: int = 0):
     )
 
 
+def bulged_airbag(n: int, bending: bool = False):
+    """The airbag on n x n squares with a bulged, drawn-in state u (taut, wrinkled and slack
+    elements), for evaluations."""
+    overrides = {"mesh": {"rectangle": {"nx": n, "ny": n}}, "material": {"bending": bending}}
+    model = read_case(AIRBAG, overrides=overrides).model
+    X = model.mesh.nodes
+    side = X[:, 0].max()
+    bulge = 0.05 * np.cos(0.5 * np.pi * X[:, 0] / side) * np.cos(0.5 * np.pi * X[:, 1] / side)
+    u = np.column_stack([-0.01 * X[:, 0], -0.005 * X[:, 1] ** 2, bulge]).ravel()
+    u[model.constrained] = 0.0
+    return model, u
+
+
 @needs_numba
 def test_element_stiffness_equals_numpy_formula():
     area, F, grad, tangent, stress = random_element_data(257)
@@ -80,13 +93,7 @@ def test_airbag_evaluation_same_with_and_without_compiled_kernels(monkeypatch, n
     and slack elements, follower pressure; with the bending stiffness too) agree to
     round-off; on 8 x 8 squares the compiled assembly has one chunk of elements, on 40 x 40
     (3,200 triangles) four, in colours."""
-    overrides = {"mesh": {"rectangle": {"nx": n, "ny": n}}, "material": {"bending": bending}}
-    model = read_case(AIRBAG, overrides=overrides).model
-    X = model.mesh.nodes
-    side = X[:, 0].max()
-    bulge = 0.05 * np.cos(0.5 * np.pi * X[:, 0] / side) * np.cos(0.5 * np.pi * X[:, 1] / side)
-    u = np.column_stack([-0.01 * X[:, 0], -0.005 * X[:, 1] ** 2, bulge]).ravel()
-    u[model.constrained] = 0.0
+    model, u = bulged_airbag(n, bending)
     evaluations = {}
     for switch in ("0", "1"):
         monkeypatch.setenv("WRINKLE_NUMBA", switch)  # the kernels are chosen by the system
@@ -450,3 +457,71 @@ def test_coloured_vector_assembly_and_pressure_work_equal_numpy():
     assert compiled.pressure_work(x, pressure) == pytest.approx(
         float(pressure @ pressure_volume(x)), rel=1e-12
     )
+
+
+@needs_numba
+@pytest.mark.parametrize("bending", [False, True])
+def test_deferred_stiffness_is_the_one_formed_at_once(monkeypatch, bending):
+    """An evaluation with ``defer`` holds no stiffness but forms, when asked, exactly the
+    tangent of the evaluation without it; its forces and energy are the same bits."""
+    monkeypatch.setenv("WRINKLE_NUMBA", "1")
+    model, u = bulged_airbag(24, bending)
+    problem = model.discretise().at(1.0)
+    now = problem.evaluate(u)
+    later = problem.evaluate(u, defer=True)
+    assert later.stiffness is None and later.later is not None
+    np.testing.assert_array_equal(later.residual, now.residual)
+    assert later.energy == now.energy
+    formed = later.with_stiffness()
+    assert formed.later is None and formed.with_stiffness() is formed
+    np.testing.assert_array_equal(formed.stiffness.data, now.stiffness.data)
+    np.testing.assert_array_equal(formed.stiffness.indices, now.stiffness.indices)
+    assert now.with_stiffness() is now
+
+
+@needs_numba
+def test_stiffness_formed_at_once_where_it_cannot_be_deferred(monkeypatch):
+    """With a lift or the constrained rows kept, and on the NumPy kernels, ``defer`` gives
+    the stiffness at once."""
+    model, u = bulged_airbag(8)
+    lift = np.where(model.constrained, 1e-3, 0.0)
+    for switch in ("0", "1"):
+        monkeypatch.setenv("WRINKLE_NUMBA", switch)
+        model.assign_material(model.materials[0])
+        problem = model.discretise().at(1.0)
+        assert problem.evaluate(u, defer=True, lift=lift).stiffness is not None
+        assert problem.evaluate(u, defer=True, keep_constrained=True).stiffness is not None
+        deferred = problem.evaluate(u, defer=True)
+        assert (deferred.stiffness is None) == (switch == "1")
+
+
+@needs_numba
+def test_solve_deferring_the_stiffness_takes_the_same_iterates(monkeypatch):
+    """A Newton solve whose trial points defer their stiffness takes the same iterates, bit
+    for bit, as one that forms it at every trial point, and assembles it only at the points
+    it accepts (fewer times)."""
+    from wrinkle.system import DiscreteSystem, StepProblem
+
+    monkeypatch.setenv("WRINKLE_NUMBA", "1")
+    assembled = []
+    assemble = DiscreteSystem.assemble_stiffness
+
+    def counted(self, *args):
+        assembled.append(1)
+        return assemble(self, *args)
+
+    monkeypatch.setattr(DiscreteSystem, "assemble_stiffness", counted)
+    runs = {}
+    for defers in (False, True):
+        monkeypatch.setattr(StepProblem, "defers_stiffness", defers)
+        case = read_case(AIRBAG, overrides={"mesh": {"rectangle": {"nx": 16, "ny": 16}}})
+        assembled.clear()
+        results = case.model.solve(case.settings)
+        runs[defers] = (results.final.iterations, results.final.displacement, len(assembled))
+    (iterations, u, calls), (iterations_deferred, u_deferred, calls_deferred) = (
+        runs[False],
+        runs[True],
+    )
+    assert iterations_deferred == iterations
+    np.testing.assert_array_equal(u_deferred, u)
+    assert calls_deferred < calls

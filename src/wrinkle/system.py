@@ -889,11 +889,19 @@ class DiscreteSystem:
             return 0.0
         forces = self.bending.forces(u)
         internal += forces
-        if data is not None and self.compiled:  # the positions hold no index twice
-            compiled.add_unique(data, self._bending_positions, self._bending_values)
-        elif data is not None:
-            data[self._bending_positions] += self._bending_values
+        if data is not None:
+            self.add_bending_stiffness(data)
         return 0.5 * float(u @ forces)
+
+    def add_bending_stiffness(self, data: np.ndarray) -> None:
+        """Add the constant bending stiffness to the tangent's CSR data in place (nothing
+        without bending)."""
+        if self.bending is None:
+            return
+        if self.compiled:  # the positions hold no index twice
+            compiled.add_unique(data, self._bending_positions, self._bending_values)
+        else:
+            data[self._bending_positions] += self._bending_values
 
     def reactions(self, u: np.ndarray, load_factor: float) -> np.ndarray:
         """Support reactions f* - f_ext at the constrained dofs (zero elsewhere), (n_dofs,)."""
@@ -982,6 +990,9 @@ class StepProblem:
         # first evaluation unless given
         self.motion_force: float | None = None
 
+    #: ``evaluate`` takes ``defer`` (``wrinkle.solvers.base.deferring``)
+    defers_stiffness = True
+
     def _kept_dofs(self, everything: bool) -> np.ndarray:
         """(n_elements, 9) bool: the element dofs whose stiffness rows and columns are
         assembled, every one or the free ones (``DiscreteSystem.assemble_stiffness``)."""
@@ -997,9 +1008,14 @@ class StepProblem:
         lift: np.ndarray | None = None,
         keep_constrained: bool = False,
         keep_elements: bool = False,
+        defer: bool = False,
     ) -> Evaluation:
         """Residual, energy, element states and (``stiffness``) the tangent at u, (n_dofs,).
 
+        defer: with ``stiffness``, leave the tangent to be formed when it is asked for
+        (``Evaluation.with_stiffness``) where that costs nothing more (the compiled kernels,
+        no lift, nothing kept, no cables or follower edge loads): the evaluation keeps the
+        elements' material tangent, and a solver that rejects the point never assembles it.
         lift: (n_dofs,) an increment of the constrained components (zero elsewhere); the
         residual is then the out-of-balance force linearised at u + lift,
         f - f*(u) - K lift on the free rows, from the tangent K at u before its constrained
@@ -1010,7 +1026,19 @@ class StepProblem:
         """
         system, timer = self.system, self.timer
         pattern = system.pattern
-        data = np.zeros(pattern.nnz) if stiffness else np.empty(0)  # the stiffness' CSR data
+        # compiled kernels: the element matrices formed and added in one parallel pass, now
+        # or (deferred) when the tangent is asked for
+        fused = stiffness and system.compiled
+        deferred = (
+            defer
+            and fused
+            and lift is None
+            and not keep_constrained
+            and system.cables is None
+            and not system.has_follower_edges
+        )
+        assemble = stiffness and not deferred
+        data = np.zeros(pattern.nnz) if assemble else np.empty(0)  # the stiffness' CSR data
 
         with timer.part(ELEMENTS):
             x = system.element_coordinates(u)  # shared by the elements and the pressure
@@ -1025,8 +1053,6 @@ class StepProblem:
             with timer.part(ASSEMBLY):
                 pattern.add_to_data(data, elements, -K, compiled=system.compiled)
 
-        # compiled kernels: the element matrices formed and added in one parallel pass
-        fused = stiffness and system.compiled
         with timer.part(ELEMENTS):
             result = system.evaluate_elements(
                 u,
@@ -1036,7 +1062,7 @@ class StepProblem:
                 matrices=not fused,
             )
         with timer.part(ASSEMBLY):
-            if fused:
+            if fused and not deferred:
                 # the constrained rows and columns are zeroed below: not added at all, unless
                 # they are kept or the lift needs them
                 everything = keep_constrained or lift is not None
@@ -1044,8 +1070,8 @@ class StepProblem:
                     data, result, x, self.pressures, self._kept_dofs(everything)
                 )
             internal = pattern.assemble_vector(result.forces, compiled=system.compiled)
-            other_energy = system.add_bending(u, internal, data if stiffness else None)
-            other_energy += system.add_cables(u, internal, data if stiffness else None)
+            other_energy = system.add_bending(u, internal, data if assemble else None)
+            other_energy += system.add_cables(u, internal, data if assemble else None)
         external = self.forces
         energy = float(np.sum(result.energy) + other_energy - self.forces @ u)
         if system.has_follower_loads:
@@ -1077,18 +1103,20 @@ class StepProblem:
             int(np.count_nonzero(state == SLACK)),
         )
         K = None
-        if stiffness:
+        if assemble:
             with timer.part(ASSEMBLY):
                 if lift is not None:
                     coupling = pattern.matrix(data) @ lift
                     residual = np.where(self.free, residual - coupling, 0.0)
-                if not keep_constrained and system.compiled:
-                    compiled.put(data, self._constraint_positions, 0.0)
-                    compiled.put(data, self._constrained_diagonal, 1.0)
-                elif not keep_constrained:
-                    data[self._constraint_positions] = 0.0
-                    data[self._constrained_diagonal] = 1.0
+                if not keep_constrained:
+                    self._zero_constrained(data)
                 K = pattern.matrix(data)
+        later = None
+        if deferred:
+
+            def later() -> sp.csr_matrix:
+                return self._deferred_stiffness(result, x)
+
         return Evaluation(
             residual,
             energy,
@@ -1102,4 +1130,26 @@ class StepProblem:
             reactions,
             lambda: system.inadmissible(system.element_coordinates(u)),
             result if keep_elements else None,
+            later,
         )
+
+    def _zero_constrained(self, data: np.ndarray) -> None:
+        """The constrained rows and columns of the tangent's data zeroed, their diagonal one."""
+        if self.system.compiled:
+            compiled.put(data, self._constraint_positions, 0.0)
+            compiled.put(data, self._constrained_diagonal, 1.0)
+        else:
+            data[self._constraint_positions] = 0.0
+            data[self._constrained_diagonal] = 1.0
+
+    def _deferred_stiffness(self, result: ElementResult, x: np.ndarray) -> sp.csr_matrix:
+        """The tangent of an evaluation made with ``defer``: the element matrices from its
+        material tangent (result, x its coordinates), the constant bending stiffness, the
+        constrained rows and columns zeroed; what ``evaluate`` forms at once otherwise."""
+        system, pattern = self.system, self.system.pattern
+        with self.timer.part(ASSEMBLY):
+            data = np.zeros(pattern.nnz)
+            system.assemble_stiffness(data, result, x, self.pressures, self._kept_dofs(False))
+            system.add_bending_stiffness(data)
+            self._zero_constrained(data)
+            return pattern.matrix(data)

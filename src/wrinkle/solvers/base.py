@@ -8,7 +8,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
 import numpy as np
@@ -35,6 +35,7 @@ __all__ = [
     "RegularisedSolver",
     "SolverResult",
     "StopRule",
+    "deferring",
     "is_converged",
     "IterationListener",
     "listening",
@@ -75,6 +76,8 @@ class Evaluation:
         (``inadmissible``), not for every trial point. None: every state is physical.
     elements: the problem's element results at u, where the caller asked it to keep them
         (the sensitivities of ``wrinkle.identification``); None otherwise.
+    later: where the stiffness was deferred (``wrinkle.system.StepProblem.evaluate`` with
+        ``defer``), the function that forms it (``with_stiffness``); None otherwise.
     """
 
     residual: np.ndarray
@@ -89,6 +92,14 @@ class Evaluation:
     reactions: np.ndarray | None = None
     admissibility: Callable[[], str | None] | None = None
     elements: Any = None
+    later: Callable[[], sp.csr_matrix] | None = None
+
+    def with_stiffness(self) -> Evaluation:
+        """This evaluation with its deferred stiffness formed (``later``); itself where the
+        stiffness is there already or was not asked for."""
+        if self.stiffness is not None or self.later is None:
+            return self
+        return replace(self, stiffness=self.later(), later=None)
 
     @property
     def inadmissible(self) -> str | None:
@@ -213,6 +224,13 @@ def try_evaluate(
     if not (math.isfinite(evaluation.residual_norm) and math.isfinite(evaluation.force_scale)):
         return None  # forces so large that their norm overflows
     return evaluation
+
+
+def deferring(problem: Problem) -> dict[str, bool]:
+    """The options of ``problem.evaluate`` that defer the stiffness of a trial point until
+    it is accepted (``Evaluation.with_stiffness``), where the problem can
+    (``defers_stiffness``); none otherwise."""
+    return {"defer": True} if getattr(problem, "defers_stiffness", False) else {}
 
 
 def is_converged(evaluation: Evaluation, tolerance: float) -> bool:
@@ -531,7 +549,8 @@ class RegularisedSolver(ABC):
                 step, predicted = self.trial_step(ev, theta, problem.free)
                 trial = None
                 if step is not None and predicted > 0:
-                    trial = try_evaluate(problem, u + step)
+                    # the tangent formed only if the point is accepted, where the problem can
+                    trial = try_evaluate(problem, u + step, **deferring(problem))
                 rho = -np.inf if trial is None else self.gain_ratio(ev, trial, predicted)
                 if rho < 0.25:
                     theta = self.increase(theta)
@@ -539,7 +558,7 @@ class RegularisedSolver(ABC):
                     theta = self.decrease(theta)
                 if rho > 0.0 and step is not None and trial is not None:
                     u = u + step
-                    ev = trial
+                    ev = trial.with_stiffness()
                     full = True
                     break
                 shorter = None if step is None else self.backtrack(problem, u, ev, step)
