@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from scipy.spatial import Delaunay
 
 from wrinkle import Mesh, Model, StVenantKirchhoff
@@ -168,3 +169,26 @@ def test_adding_blocks_of_element_matrices_equals_assembling_all(renumber):
     Ke[[3, 100, 7]] += Ke[[3, 100, 7]]
     Ke[3] += Ke[3] / 2
     np.testing.assert_allclose(data, pattern.assemble_data(Ke), atol=1e-12)
+
+
+@pytest.mark.parametrize("coupled", [False, True])
+def test_pattern_matrices_are_marked_sorted_and_are(mesh, coupled):
+    """``SparsityPattern.matrix`` tells SciPy its indices are sorted (so that SciPy does not
+    check each new matrix): SciPy's own check of the same indices, on a copy that was not
+    told, agrees; also with further node pairs (the bending energy's) in the pattern and on a
+    mesh numbered at random."""
+    pairs = None
+    if coupled:
+        rng = np.random.default_rng(4)
+        pairs = rng.integers(0, mesh.n_nodes, (20, 2))
+    pattern = SparsityPattern(mesh.triangles, mesh.n_nodes, pairs)
+    K = pattern.matrix(np.ones(pattern.nnz))
+    assert K.has_sorted_indices
+    untold = sp.csr_matrix((K.data, K.indices.copy(), K.indptr.copy()), shape=K.shape)
+    assert untold.has_sorted_indices  # SciPy's check of the indices themselves
+    assert np.all(np.diff(K.indices)[np.diff(rows_of_pattern(pattern)) == 0] > 0)
+
+
+def rows_of_pattern(pattern: SparsityPattern) -> np.ndarray:
+    """The row of each stored entry, (nnz,)."""
+    return np.repeat(np.arange(pattern.n_dofs), np.diff(pattern.indptr))

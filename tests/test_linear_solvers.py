@@ -445,3 +445,32 @@ def test_the_same_solutions_from_the_free_block(monkeypatch):
     )
     assert np.linalg.norm(np.subtract(top, top_ref)) <= 1e-6 * np.linalg.norm(top_ref)
     assert taken and all(taken)  # every factorisation with the split on took the block
+
+
+def test_a_pattern_is_known_again_by_its_memory_and_by_its_contents(monkeypatch):
+    """``_PatternCache.same``: matrices that SciPy builds on the same pattern arrays hold
+    views of them, not the arrays themselves; they are known without comparing the arrays
+    (the comparison is made to fail here). A copy of the pattern is known by comparison, a
+    changed pattern is not. ``with_values`` carries the sorted-indices flag over, true or
+    false."""
+    from wrinkle.solvers import linear
+    from wrinkle.solvers.base import with_values
+
+    A = spd_matrix()
+    cache = linear._PatternCache()
+    assert not cache.same(A)
+    B = sp.csr_matrix((2.0 * A.data, A.indices, A.indptr), shape=A.shape)
+    assert B.indices is not A.indices  # a view: the objects differ
+    with monkeypatch.context() as patch:
+        patch.setattr(linear.np, "array_equal", lambda *args: pytest.fail("compared"))
+        assert cache.same(B)
+        assert cache.same(with_values(B, 3.0 * A.data))
+    copied = sp.csr_matrix((A.data, A.indices.copy(), A.indptr.copy()), shape=A.shape)
+    assert cache.same(copied)
+    changed = A.copy()
+    changed.indices[[0, 1]] = changed.indices[[1, 0]]
+    assert not cache.same(changed)
+    assert with_values(A, A.data).has_sorted_indices
+    unsorted = sp.csr_matrix((A.data[::-1].copy(), A.indices[::-1].copy(), A.indptr), A.shape)
+    assert not unsorted.has_sorted_indices
+    assert not with_values(unsorted, unsorted.data).has_sorted_indices

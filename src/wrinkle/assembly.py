@@ -214,8 +214,13 @@ class SparsityPattern:
             np.add.at(data, positions, weights)
 
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:
-        """CSR matrix with this pattern and the given data (not copied)."""
-        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n_dofs, self.n_dofs))
+        """CSR matrix with this pattern and the given data (not copied). Its indices are
+        sorted by construction (a row's blocks in column order, each block's components in
+        order), which the matrix is told: SciPy would otherwise check them again wherever
+        the order matters (2.6 ms at 155,043 unknowns)."""
+        matrix = sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n_dofs, self.n_dofs))
+        matrix.has_sorted_indices = True
+        return matrix
 
     def pair_positions(self, row_nodes: np.ndarray, column_nodes: np.ndarray) -> np.ndarray:
         """Data positions of the entries (3 a + c, 3 b + c), c = 0, 1, 2, of the node pairs

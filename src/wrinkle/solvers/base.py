@@ -43,6 +43,7 @@ __all__ = [
     "shifted",
     "stiffness_scale",
     "try_evaluate",
+    "with_values",
 ]
 
 logger = logging.getLogger("wrinkle.solver")
@@ -277,7 +278,16 @@ def shifted(
         diagonal = diagonal_positions(K)
     data = K.data.astype(np.result_type(K.data, shift))
     data[diagonal[free]] += shift
-    return sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
+    return with_values(K, data)
+
+
+def with_values(K: sp.csr_matrix, data: np.ndarray) -> sp.csr_matrix:
+    """A CSR matrix on K's pattern (shared, not copied) with the values data (nnz,); K's
+    sorted-indices flag carried over (``wrinkle.assembly.SparsityPattern.matrix`` sets it),
+    so that SciPy does not check the indices of each new matrix again."""
+    matrix = sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
+    matrix.has_sorted_indices = K.has_sorted_indices
+    return matrix
 
 
 IterationListener = Callable[[str, int, float, tuple[int, int, int]], None]

@@ -39,6 +39,7 @@ from wrinkle.solvers.base import (
     shifted,
     stiffness_scale,
     try_evaluate,
+    with_values,
 )
 from wrinkle.solvers.linear import diagonal_positions
 
@@ -81,7 +82,7 @@ class RegularisedNewton(RegularisedSolver):
         else:
             data = K.data + factor * ev.metric
             data[positions[free]] += shift
-        return sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
+        return with_values(K, data)
 
     def trial_step(
         self, ev: Evaluation, theta: float, free: np.ndarray
