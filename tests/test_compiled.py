@@ -17,7 +17,12 @@ import pytest
 from wrinkle import compiled
 from wrinkle.assembly import SparsityPattern, chunk_colouring
 from wrinkle.case import read_case
-from wrinkle.element import element_stiffness, nodal_forces, strain_displacement
+from wrinkle.element import (
+    element_stiffness,
+    nodal_forces,
+    strain_displacement,
+    unit_tension_stiffness,
+)
 from wrinkle.kinematics import deformation_gradient, element_coordinates, right_cauchy_green
 from wrinkle.loads import pressure_forces, pressure_volume, subtract_pressure_stiffness
 from wrinkle.materials import StVenantKirchhoff
@@ -525,3 +530,48 @@ def test_solve_deferring_the_stiffness_takes_the_same_iterates(monkeypatch):
     assert iterations_deferred == iterations
     np.testing.assert_array_equal(u_deferred, u)
     assert calls_deferred < calls
+
+
+@needs_numba
+@pytest.mark.parametrize("shuffled", [False, True])
+def test_assembled_laplacian_equals_unit_tension_stiffness_scattered(shuffled):
+    """The coloured, compiled unit-tension stiffness (the step metric's Laplacian) equals
+    ``unit_tension_stiffness``'s element matrices scattered by np.bincount, added to what the
+    data held; and the step metric of a whole model (weighted by a tension) is the NumPy
+    one."""
+    triangles, n_nodes = shuffled_mesh_triangles(24, seed=9)
+    if not shuffled:
+        mesh = rectangle(1.0, 1.0, 24, 24)
+        triangles, n_nodes = mesh.triangles, mesh.n_nodes
+    m = triangles.shape[0]
+    pattern = SparsityPattern(triangles, n_nodes)
+    area, _, grad, _, _ = random_element_data(m, seed=10)
+    before = np.random.default_rng(11).normal(size=pattern.nnz)
+    expected = before + pattern.assemble_data(unit_tension_stiffness(area, grad))
+    data = before.copy()
+    compiled.assemble_laplacian(
+        data,
+        (pattern.element_block_base, pattern.element_row_step),
+        area,
+        grad,
+        chunk_colouring(triangles, n_nodes, chunk=64),
+    )
+    np.testing.assert_allclose(data, expected, rtol=1e-14, atol=1e-14 * np.abs(expected).max())
+
+
+@needs_numba
+def test_step_metric_same_with_and_without_kernels(monkeypatch):
+    """The model's step metric (and weighted by each element's tension) with the compiled
+    kernels is the NumPy one."""
+    model, _ = bulged_airbag(24)
+    tension = np.linspace(1.0, 3.0, model.mesh.n_elements)
+    metrics = {}
+    for switch in ("0", "1"):
+        monkeypatch.setenv("WRINKLE_NUMBA", switch)
+        model.assign_material(model.materials[0])
+        system = model.discretise()
+        assert system.compiled == (switch == "1")
+        metrics[switch] = (system.step_metric(), system.step_metric(tension))
+    for numpy_metric, metric in zip(metrics["0"], metrics["1"], strict=True):
+        scale = np.abs(numpy_metric).max()
+        np.testing.assert_allclose(metric, numpy_metric, rtol=0, atol=1e-14 * scale)

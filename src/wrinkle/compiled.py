@@ -85,6 +85,7 @@ __all__ = [
     "asymmetry",
     "add_pressure_forces",
     "add_unique",
+    "assemble_laplacian",
     "assemble_stiffness",
     "assemble_vector",
     "deformation_gradient",
@@ -234,6 +235,27 @@ def _assemble_stiffness(
                                 for j in range(3):
                                     if kept[e, 3 * l + j]:
                                         data[p + j] += K[r, 3 * l + j]
+
+
+def _assemble_laplacian(data, base, step, area, shape_gradient, colouring):
+    """data[p] += area[e] grad psi_k . grad psi_l at the diagonal entries (3 k + i, 3 l + i)
+    of every element's node-pair blocks, p = base[e, 3 k + l] + (step[e, k] + 1) i: the
+    assembled A0 (grad psi_k . grad psi_l) I3 of ``wrinkle.element.unit_tension_stiffness``
+    (its other entries are zero), over coloured chunks as ``_assemble_stiffness``."""
+    chunk_start, chunk_order, colour_start = colouring
+    for colour in range(colour_start.size - 1):
+        for c in prange(colour_start[colour], colour_start[colour + 1]):
+            chunk = chunk_order[c]
+            for e in range(chunk_start[chunk], chunk_start[chunk + 1]):
+                a = area[e]
+                for k in range(3):
+                    g0, g1 = shape_gradient[e, k, 0], shape_gradient[e, k, 1]
+                    stride = step[e, k] + 1
+                    for l in range(3):
+                        value = a * (g0 * shape_gradient[e, l, 0] + g1 * shape_gradient[e, l, 1])
+                        p = base[e, 3 * k + l]
+                        for i in range(3):
+                            data[p + stride * i] += value
 
 
 def _assemble_vector(out, dofs, values, colouring):
@@ -643,6 +665,7 @@ def _make_kernels() -> None:
         "element_coordinates": parallel(_element_coordinates),
         "put": parallel(_put),
         "assemble_vector": parallel(_assemble_vector),
+        "assemble_laplacian": parallel(_assemble_laplacian),
         "pressure_work": parallel(_pressure_work),
         "take": parallel(_take),
         "add_unique": parallel(_add_unique),
@@ -778,6 +801,30 @@ def assemble_stiffness(
         np.ascontiguousarray(pressure, dtype=float),
         colouring,
         np.ascontiguousarray(kept, dtype=np.bool_),
+    )
+
+
+def assemble_laplacian(
+    data: np.ndarray,
+    positions: tuple[np.ndarray, np.ndarray],
+    area: np.ndarray,
+    shape_gradient: np.ndarray,
+    colouring: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """Add the unit-tension stiffness A0 (grad psi_k . grad psi_l) I3 of m elements
+    (``wrinkle.element.unit_tension_stiffness``: a Laplacian on each displacement component)
+    to the CSR data (nnz,) in place, in parallel over coloured chunks of elements and without
+    an (m, 9, 9) array; positions, colouring as ``assemble_stiffness``; area (m,) m^2 (times
+    a tension where the caller weights the elements), shape_gradient (m, 3, 2) 1/m. The sums
+    differ from a serial scatter's only in their order (round-off)."""
+    base, step = positions
+    _compiled("assemble_laplacian")(
+        data,
+        np.ascontiguousarray(base),
+        np.ascontiguousarray(step),
+        np.ascontiguousarray(area, dtype=float),
+        np.ascontiguousarray(shape_gradient, dtype=float),
+        colouring,
     )
 
 

@@ -79,7 +79,9 @@ class Mesh:
         if repeated.size:
             raise ValueError(f"element {repeated[0]} repeats a node: {triangles[repeated[0]]}")
         key = np.sort(triangles, axis=1)
-        _, first, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
+        _, first, counts = np.unique(
+            _triangle_codes(key, nodes.shape[0]), return_index=True, return_counts=True
+        )
         if np.any(counts > 1):
             dup = np.flatnonzero(np.all(key == key[first[counts > 1][0]], axis=1))
             raise ValueError(f"elements {dup.tolist()} are duplicates (same three nodes)")
@@ -137,6 +139,17 @@ def _checked_sets(sets: dict, kind: str, count: int) -> dict[str, np.ndarray]:
             )
         checked[name] = indices.astype(np.int64)
     return checked
+
+
+def _triangle_codes(key: np.ndarray, n_nodes: int) -> np.ndarray:
+    """One number for each row of key (m, 3) node indices below n_nodes, equal only for equal
+    rows: (a n + b) n + c where n^3 fits in int64 (NumPy's unique of rows sorts a
+    structured view instead, 0.4 s at 10^6 triangles), else the rows as a structured view."""
+    if n_nodes < 2_000_000:
+        key = key.astype(np.int64)
+        return (key[:, 0] * n_nodes + key[:, 1]) * n_nodes + key[:, 2]
+    rows = np.ascontiguousarray(key)
+    return rows.view([("", rows.dtype)] * 3).ravel()
 
 
 def _sorted_unique(values: np.ndarray) -> np.ndarray:

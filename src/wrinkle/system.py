@@ -484,6 +484,16 @@ class DiscreteSystem:
         g = self.geometry
         area = g.area if tension is None else g.area * tension
         data = np.zeros(self.pattern.nnz)
+        if self.compiled:  # in parallel, without the elements' (m, 9, 9) matrices
+            pattern = self.pattern
+            compiled.assemble_laplacian(
+                data,
+                (pattern.element_block_base, pattern.element_row_step),
+                area,
+                g.shape_gradient,
+                pattern.colouring,
+            )
+            return data
         for start in range(0, g.n_elements, KERNEL_BLOCK):
             block = slice(start, min(start + KERNEL_BLOCK, g.n_elements))
             self.pattern.add_to_data(
