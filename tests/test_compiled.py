@@ -308,6 +308,15 @@ def shuffled_mesh_triangles(n: int, seed: int) -> tuple[np.ndarray, int]:
     return triangles[rows, (np.arange(3) + turns[:, None]) % 3], mesh.n_nodes
 
 
+def square_mesh_triangles(shuffled: bool, seed: int) -> tuple[np.ndarray, int]:
+    """The triangles of a 24 x 24 square mesh and its node count, shuffled
+    (``shuffled_mesh_triangles``) or as generated."""
+    if shuffled:
+        return shuffled_mesh_triangles(24, seed)
+    mesh = rectangle(1.0, 1.0, 24, 24)
+    return mesh.triangles, mesh.n_nodes
+
+
 @pytest.mark.parametrize("shuffled", [False, True])
 def test_chunk_colouring_puts_no_shared_node_in_one_colour(shuffled):
     """Every chunk once; chunks of one colour share no node; a mesh numbered row by row
@@ -339,10 +348,7 @@ def test_assembled_stiffness_equals_element_matrices_scattered(shuffled):
     """The fused, coloured assembly equals the element matrices of ``element_stiffness``
     minus the pressure stiffness, scattered by np.bincount, on the kept rows and columns;
     the other entries are left as they were."""
-    triangles, n_nodes = shuffled_mesh_triangles(24, seed=5)
-    if not shuffled:
-        mesh = rectangle(1.0, 1.0, 24, 24)
-        triangles, n_nodes = mesh.triangles, mesh.n_nodes
+    triangles, n_nodes = square_mesh_triangles(shuffled, seed=5)
     m = triangles.shape[0]
     pattern = SparsityPattern(triangles, n_nodes)
     area, F, grad, tangent, stress = random_element_data(m, seed=7)
@@ -537,12 +543,8 @@ def test_solve_deferring_the_stiffness_takes_the_same_iterates(monkeypatch):
 def test_assembled_laplacian_equals_unit_tension_stiffness_scattered(shuffled):
     """The coloured, compiled unit-tension stiffness (the step metric's Laplacian) equals
     ``unit_tension_stiffness``'s element matrices scattered by np.bincount, added to what the
-    data held; and the step metric of a whole model (weighted by a tension) is the NumPy
-    one."""
-    triangles, n_nodes = shuffled_mesh_triangles(24, seed=9)
-    if not shuffled:
-        mesh = rectangle(1.0, 1.0, 24, 24)
-        triangles, n_nodes = mesh.triangles, mesh.n_nodes
+    data held."""
+    triangles, n_nodes = square_mesh_triangles(shuffled, seed=9)
     m = triangles.shape[0]
     pattern = SparsityPattern(triangles, n_nodes)
     area, _, grad, _, _ = random_element_data(m, seed=10)
