@@ -273,6 +273,7 @@ class SparsityPattern:
 
     def constraint_positions(self, constrained: np.ndarray) -> np.ndarray:
         """Data positions of all entries in a constrained row or column; constrained (n_dofs,)
-        bool."""
-        rows = np.repeat(np.arange(self.n_dofs), np.diff(self.indptr))
-        return np.flatnonzero(constrained[rows] | constrained[self.indices])
+        bool. (Each entry's row flag repeated along the row: one byte an entry, not the row
+        numbers' eight, 0.5 GB at 10^6 elements with bending.)"""
+        in_row = np.repeat(np.asarray(constrained, dtype=bool), np.diff(self.indptr))
+        return np.flatnonzero(in_row | constrained[self.indices])
