@@ -38,7 +38,8 @@ installed (extra ``fast``); NumPy versions of the same formulas are the fallback
   and its serial scatter took 25 ms of an evaluation of the 320 x 160 sheared rectangle,
   this 7.5 ms (docs/notes/2026-12-evaluation-speed.md).
 - ``assemble_vector``: the element forces summed into the global vector over the same
-  coloured chunks, in parallel (``SparsityPattern.assemble_vector``).
+  coloured chunks, in parallel (``SparsityPattern.assemble_vector``); ``assemble_laplacian``:
+  the step metric (``DiscreteSystem.step_metric``) added over them likewise.
 - ``deformation_gradient`` (F and C in one pass) and ``element_coordinates``: the NumPy
   formulas element by element in parallel, bit for bit; ``pressure_work``: the pressure's
   work p V (``wrinkle.loads.pressure_volume``) summed in parallel.

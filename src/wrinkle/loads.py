@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from wrinkle.kinematics import cross
+from wrinkle.mesh import edge_numbers
 
 __all__ = [
     "boundary_edges",
@@ -165,12 +166,6 @@ def boundary_edges(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     local = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1]])
     triples = triangles[:, local].reshape(-1, 3)  # (3 n, 3): a, b, c per edge
     owner = np.repeat(np.arange(triangles.shape[0]), 3)
-    # each edge as one integer, smaller node x n + larger node: NumPy's unique of rows sorts
-    # a structured view, 110 ms against 20 ms at 10^5 triangles
-    n = int(triangles.max(initial=-1)) + 1
-    key = np.minimum(triples[:, 0], triples[:, 1]).astype(np.int64) * n + np.maximum(
-        triples[:, 0], triples[:, 1]
-    )
-    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
-    single = counts[inverse] == 1
+    _, edge_of, counts = edge_numbers(triangles, int(triangles.max(initial=-1)) + 1)
+    single = counts[edge_of.ravel()] == 1  # the edges in the order of triples
     return triples[single], owner[single]

@@ -22,6 +22,7 @@ __all__ = [
     "Mesh",
     "annulus",
     "boundary_nodes",
+    "edge_numbers",
     "mesh_edges",
     "cylinder",
     "disk",
@@ -159,16 +160,23 @@ def _sorted_unique(values: np.ndarray) -> np.ndarray:
     return values[np.concatenate([[True], values[1:] != values[:-1]])] if values.size else values
 
 
+def edge_numbers(triangles: np.ndarray, n_nodes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The edges of triangles (m, 3) over nodes below n_nodes, each as one integer, lower
+    node x n_nodes + higher node (sorting integers, not rows of pairs: 20 against 110 ms at
+    10^5 triangles): the sorted keys (n_edges,), each triangle's edge numbers for its edges
+    (a, b), (b, c), (c, a), (m, 3), and how many triangles share each edge, (n_edges,)."""
+    pairs = triangles[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2).astype(np.int64)
+    keys = np.minimum(pairs[:, 0], pairs[:, 1]) * n_nodes + np.maximum(pairs[:, 0], pairs[:, 1])
+    unique, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
+    return unique, inverse.reshape(-1, 3), counts
+
+
 def mesh_edges(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The mesh's edges: (n_edges, 2) node pairs, lower node first, sorted; each triangle's
     edge numbers for its edges (a, b), (b, c), (c, a), (n_elements, 3); and how many
     triangles share each edge, (n_edges,) (1 on the boundary)."""
-    n_nodes = mesh.n_nodes
-    pairs = np.sort(mesh.triangles[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2), axis=1)
-    keys = pairs[:, 0] * n_nodes + pairs[:, 1]
-    unique, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
-    edges = np.column_stack(np.divmod(unique, n_nodes))
-    return edges, inverse.reshape(-1, 3), counts
+    keys, edge_of, counts = edge_numbers(mesh.triangles, mesh.n_nodes)
+    return np.column_stack(np.divmod(keys, mesh.n_nodes)), edge_of, counts
 
 
 def boundary_nodes(mesh: Mesh) -> np.ndarray:
