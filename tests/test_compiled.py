@@ -397,8 +397,8 @@ def test_strain_and_coordinate_kernels_equal_numpy_bit_for_bit():
 
 @needs_numba
 def test_gather_scatter_and_shift_kernels_equal_numpy():
-    """put, take, any_nonzero, add_unique and the regularised sum equal their NumPy forms
-    exactly."""
+    """put, take, any_nonzero, add_unique and the gathered sums of two value arrays equal
+    their NumPy forms exactly."""
     rng = np.random.default_rng(12)
     data = rng.normal(size=1000)
     positions = rng.choice(1000, 300, replace=False)
@@ -418,9 +418,50 @@ def test_gather_scatter_and_shift_kernels_equal_numpy():
     expected[positions] += np.arange(300.0)
     np.testing.assert_array_equal(added, expected)
     other = rng.normal(size=1000)
-    shifted = data + 0.37 * other
-    shifted[positions] += 2.5
-    np.testing.assert_array_equal(compiled.shifted_sum(data, other, 0.37, positions, 2.5), shifted)
+    flagged = np.zeros(1000, dtype=bool)
+    flagged[positions[::3]] = True
+    expected = data + 0.37 * other
+    expected[flagged] += 2.5
+    np.testing.assert_array_equal(
+        compiled.sum_take(data, other, 0.37, flagged, 2.5, positions), expected[positions]
+    )
+    cancelling = data.copy()
+    cancelling[positions] = -0.5 * other[positions]
+    cancelling[flagged] -= 2.5
+    assert not compiled.sum_any_nonzero(cancelling, other, 0.5, flagged, 2.5, positions)
+    assert compiled.sum_any_nonzero(cancelling, other, 0.5, flagged, 2.0, positions)
+    cancelling[positions[4]] = np.nan
+    assert compiled.sum_any_nonzero(cancelling, other, 0.5, flagged, 2.5, positions)
+    with pytest.raises(ValueError, match="values"):
+        compiled.sum_take(data, other[:-1], 0.37, flagged, 2.5, positions)
+
+
+@needs_numba
+@pytest.mark.parametrize("shuffled", [False, True])
+def test_transpose_positions_find_each_entrys_transpose(shuffled):
+    """Each entry's transpose found by bisection is where SciPy's transpose puts it, on the
+    pattern of a mesh's stiffness (shuffled or not); a pattern lacking one transpose gives
+    -1 there and nowhere else."""
+    triangles, n_nodes = square_mesh_triangles(shuffled, seed=4)
+    pattern = SparsityPattern(triangles, n_nodes)
+    A = pattern.matrix(np.arange(1.0, pattern.nnz + 1))
+    transpose = compiled.transpose_positions(A.indptr, A.indices)
+    expected = A.T.tocsr()
+    expected.sort_indices()
+    np.testing.assert_array_equal(A.data[transpose], expected.data)
+    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+    np.testing.assert_array_equal(rows[transpose], A.indices)
+    # drop the entry (0, 3): its transpose (3, 0) then has none
+    lower = A.tolil()
+    lower[0, 3] = 0.0
+    lower = lower.tocsr()
+    lower.eliminate_zeros()
+    lower.sort_indices()
+    missing = compiled.transpose_positions(lower.indptr, lower.indices)
+    rows = np.repeat(np.arange(lower.shape[0]), np.diff(lower.indptr))
+    np.testing.assert_array_equal(
+        np.flatnonzero(missing < 0), np.flatnonzero((rows == 3) & (lower.indices == 0))
+    )
 
 
 @needs_numba

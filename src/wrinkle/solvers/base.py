@@ -16,6 +16,7 @@ import scipy.sparse as sp
 
 from wrinkle.solvers.linear import (
     FreeBlock,
+    Matrix,
     SuperLU,
     SymmetryCheck,
     diagonal_positions,
@@ -125,7 +126,7 @@ class LinearSolver(Protocol):
     if A is singular."""
 
     def factorise(
-        self, A: sp.csr_matrix, symmetric: bool
+        self, A: Matrix, symmetric: bool
     ) -> Callable[[np.ndarray], np.ndarray] | None: ...
 
     def release(self) -> None:
@@ -377,7 +378,7 @@ class RegularisedSolver(ABC):
         self._timer = Stopwatch()
 
     def factorise(
-        self, A: sp.csr_matrix, symmetric: bool, free: np.ndarray | None = None
+        self, A: Matrix, symmetric: bool, free: np.ndarray | None = None
     ) -> Callable[[np.ndarray], np.ndarray] | None:
         """Solve function of the linear back-end for A (None if A is singular); the time of
         both goes to the problem's stopwatch. A matrix not known to be symmetric is checked
@@ -390,7 +391,7 @@ class RegularisedSolver(ABC):
             self.linear = make_linear_solver(self.linear_solver, A.shape[0])
         linear, timer = self.linear, self._timer
         with timer.part(LINEAR):
-            if not symmetric and not np.iscomplexobj(A.data):
+            if not symmetric and not np.issubdtype(A.dtype, np.complexfloating):
                 symmetric = self._is_symmetric(A)
             split = self._split(A, free)
             if split is None:
@@ -411,15 +412,13 @@ class RegularisedSolver(ABC):
 
         return timed_solve
 
-    def _split(
-        self, A: sp.csr_matrix, free: np.ndarray | None
-    ) -> tuple[sp.csr_matrix, np.ndarray] | None:
+    def _split(self, A: Matrix, free: np.ndarray | None) -> tuple[sp.csr_matrix, np.ndarray] | None:
         """``FreeBlock.split`` of A, or None where there is nothing held or no block."""
         if not self.free_block or free is None or bool(np.all(free)):
             return None
         return self._free_block.split(A, free)
 
-    def is_symmetric(self, A: sp.csr_matrix) -> bool:
+    def is_symmetric(self, A: Matrix) -> bool:
         """Whether A is symmetric to round-off (``SymmetryCheck``)."""
         return bool(self._is_symmetric(A))
 

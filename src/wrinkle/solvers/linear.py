@@ -48,9 +48,12 @@ __all__ = [
     "AlgebraicMultigrid",
     "Cholmod",
     "FreeBlock",
+    "Matrix",
+    "MatrixSum",
     "Pardiso",
     "SuperLU",
     "SymmetryCheck",
+    "as_csr",
     "diagonal_positions",
     "make_linear_solver",
     "upper_triangle_positions",
@@ -65,6 +68,72 @@ Solve = Callable[[np.ndarray], np.ndarray]
 # matrix, which PARDISO's pivot perturbation may not)
 AUTO_PARDISO_DOFS = 2_000
 AUTO_PARDISO_ONE_OFF_DOFS = 20_000
+
+
+class MatrixSum:
+    """A = K + factor M + shift D: K a CSR matrix, M (nnz,) the values of a symmetric matrix
+    on K's pattern, D the diagonal entries flagged in ``shifted`` (nnz,) bool; formed only
+    where a back-end reads it: the solvers' K + theta M (``wrinkle.solvers.newton``). A
+    back-end takes the free block or the upper triangle of A; summing only those entries in
+    the pass that gathers them (``values``) writes and reads again none of the (nnz,) sum,
+    and gives the entries bit for bit as the sum formed in full (K + factor M first, the
+    shift added after). Has the pattern attributes of a CSR matrix (``shape``, ``indptr``,
+    ``indices``, ``nnz``, ``has_sorted_indices``, ``dtype``); ``tocsr()`` forms all of A,
+    for the back-ends that need it."""
+
+    def __init__(
+        self, K: sp.csr_matrix, M: np.ndarray, factor: float, shifted: np.ndarray, shift: float
+    ):
+        if not M.shape == shifted.shape == K.data.shape:
+            raise ValueError(
+                f"MatrixSum: {M.shape} values of M and {shifted.shape} flags against "
+                f"{K.data.shape} values of K"
+            )
+        self.K, self.M, self.factor = K, M, float(factor)
+        self.shifted, self.shift = shifted, float(shift)
+        self.shape = K.shape
+        self.indptr, self.indices = K.indptr, K.indices
+        self.nnz = K.nnz
+        self.has_sorted_indices = K.has_sorted_indices
+        self.dtype = np.result_type(K.data, M)
+
+    def values(self, positions: np.ndarray) -> np.ndarray:
+        """A.data[positions], (k,): in one parallel pass where the compiled kernels serve A's
+        size."""
+        if compiled.serves_matrix(self.shape[0]):
+            return compiled.sum_take(*self._terms(), positions)
+        values = self.K.data[positions] + self.factor * self.M[positions]
+        values[self.shifted[positions]] += self.shift
+        return values
+
+    def any_nonzero(self, positions: np.ndarray) -> bool:
+        """np.any(A.data[positions]), without the copies where the kernels serve."""
+        if compiled.serves_matrix(self.shape[0]):
+            return compiled.sum_any_nonzero(*self._terms(), positions)
+        return bool(np.any(self.values(positions)))
+
+    def _terms(self) -> tuple[np.ndarray, np.ndarray, float, np.ndarray, float]:
+        return self.K.data, self.M, self.factor, self.shifted, self.shift
+
+    def tocsr(self) -> sp.csr_matrix:
+        """All of A, on K's pattern (shared)."""
+        data = self.K.data + self.factor * self.M
+        data[self.shifted] += self.shift
+        matrix = sp.csr_matrix((data, self.indices, self.indptr), shape=self.shape)
+        matrix.has_sorted_indices = self.has_sorted_indices
+        return matrix
+
+    def toarray(self) -> np.ndarray:
+        """A as a dense array."""
+        return self.tocsr().toarray()
+
+
+Matrix = sp.csr_matrix | MatrixSum
+
+
+def as_csr(A: Matrix) -> sp.csr_matrix:
+    """A itself if it is a CSR matrix, else all of the ``MatrixSum``."""
+    return A.tocsr() if isinstance(A, MatrixSum) else A
 
 
 class _FreedWithTheObject:
@@ -86,11 +155,11 @@ class SuperLU(_FreedWithTheObject):
     name = "superlu"
 
     @staticmethod
-    def _lu(A: sp.csr_matrix) -> spla.SuperLU | None:
+    def _lu(A: Matrix) -> spla.SuperLU | None:
         """The factorisation of the class docstring; None if A is exactly singular."""
         try:
             return spla.splu(
-                A.tocsc(),
+                as_csr(A).tocsc(),
                 permc_spec="MMD_AT_PLUS_A",
                 diag_pivot_thresh=0.0,
                 options={"SymmetricMode": True},
@@ -99,7 +168,7 @@ class SuperLU(_FreedWithTheObject):
             logger.debug("factorisation failed: %s", error)
             return None
 
-    def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
+    def factorise(self, A: Matrix, symmetric: bool) -> Solve | None:
         """LU of A (real or complex); None if it is exactly singular."""
         lu = self._lu(A)
         return None if lu is None else lu.solve
@@ -145,7 +214,7 @@ class _PatternCache:
         self._source_indptr: np.ndarray | None = None
         self._source_indices: np.ndarray | None = None
 
-    def same(self, A: sp.csr_matrix | sp.csc_matrix) -> bool:
+    def same(self, A: sp.csr_matrix | sp.csc_matrix | MatrixSum) -> bool:
         # the model's pattern arrays are never changed in place: the same memory, the same
         # pattern. SciPy's constructor hands each new matrix views of the arrays it is given,
         # so the test is on the memory, not the objects (comparing the arrays took 0.5 s of
@@ -182,19 +251,13 @@ class SymmetryCheck:
         self._pattern = _PatternCache()
         self._transpose = None
 
-    def __call__(self, A: sp.csr_matrix, relative_tolerance: float = 1e-12) -> bool:
+    def __call__(self, A: Matrix, relative_tolerance: float = 1e-12) -> bool:
         """|A - A^T| <= relative_tolerance |A| (Frobenius norms); False for a pattern that
         is not structurally symmetric."""
+        if isinstance(A, MatrixSum):
+            A = A.K  # its M is symmetric
         if not self._pattern.same(A):
-            nnz = A.nnz
-            index = np.int32 if nnz < np.iinfo(np.int32).max else np.int64
-            numbers = cast("npt.NDArray[np.int64]", np.arange(1, nnz + 1, dtype=index))
-            positions = sp.csr_matrix((numbers, A.indices, A.indptr), shape=A.shape).T.tocsr()
-            positions.sort_indices()
-            same = np.array_equal(positions.indptr, A.indptr) and np.array_equal(
-                positions.indices, A.indices
-            )
-            self._transpose = positions.data - 1 if same else None
+            self._transpose = _transpose_positions(A)
         if self._transpose is None:
             return False
         # one pass, no temporaries, where the kernels serve the mesh
@@ -204,6 +267,25 @@ class SymmetryCheck:
             difference = float(np.linalg.norm(A.data - A.data[self._transpose]))
             norm = float(np.linalg.norm(A.data))
         return difference <= relative_tolerance * norm
+
+
+def _transpose_positions(A: sp.csr_matrix) -> np.ndarray | None:
+    """The position in A.data of each entry's transpose, (nnz,); None if A's pattern is not
+    structurally symmetric. By bisection in each row where the compiled kernels serve A's
+    size and its indices are sorted (``compiled.transpose_positions``), else by SciPy's
+    transpose of the entries' numbers."""
+    if compiled.serves_matrix(A.shape[0]) and A.has_sorted_indices:
+        positions = compiled.transpose_positions(A.indptr, A.indices)
+        return positions if A.nnz == 0 or positions.min() >= 0 else None
+    nnz = A.nnz
+    index = np.int32 if nnz < np.iinfo(np.int32).max else np.int64
+    numbers = cast("npt.NDArray[np.int64]", np.arange(1, nnz + 1, dtype=index))
+    transposed = sp.csr_matrix((numbers, A.indices, A.indptr), shape=A.shape).T.tocsr()
+    transposed.sort_indices()
+    same = np.array_equal(transposed.indptr, A.indptr) and np.array_equal(
+        transposed.indices, A.indices
+    )
+    return transposed.data - 1 if same else None
 
 
 class FreeBlock:
@@ -234,7 +316,7 @@ class FreeBlock:
         self._layout: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None
         self._layout = None
 
-    def _prepare(self, A: sp.csr_matrix, free: np.ndarray) -> None:
+    def _prepare(self, A: Matrix, free: np.ndarray) -> None:
         """Find the positions for A's pattern and ``free``."""
         self._layout = None
         rows = _row_indices(A)
@@ -256,7 +338,7 @@ class FreeBlock:
         off = np.flatnonzero(~kept & ~on_diagonal).astype(index)
         self._layout = (positions, off, held_diagonal.astype(index), indptr, indices)
 
-    def split(self, A: sp.csr_matrix, free: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray] | None:
+    def split(self, A: Matrix, free: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray] | None:
         """(A_ff, A's held diagonal) if A has the structure of the class docstring (sorted
         indices; free (n,) bool, at least one component held), else None."""
         # the entries outside A_ff are at most twice those of the held rows (the pattern is
@@ -279,7 +361,7 @@ class FreeBlock:
         positions, off, held_diagonal, indptr, indices = self._layout
         if _any_nonzero(A, off):
             return None
-        held = A.data[held_diagonal]
+        held = _take(A, held_diagonal)
         if not np.all(held != 0):
             return None
         n = indptr.size - 1
@@ -288,22 +370,26 @@ class FreeBlock:
         return block, held
 
 
-def _take(A: sp.csr_matrix, positions: np.ndarray) -> np.ndarray:
+def _take(A: Matrix, positions: np.ndarray) -> np.ndarray:
     """A.data[positions]; in parallel where the compiled kernels serve A's size."""
+    if isinstance(A, MatrixSum):
+        return A.values(positions)
     if compiled.serves_matrix(A.shape[0]) and not np.iscomplexobj(A.data):
         return compiled.take(A.data, positions)
     return A.data[positions]
 
 
-def _any_nonzero(A: sp.csr_matrix, positions: np.ndarray) -> bool:
+def _any_nonzero(A: Matrix, positions: np.ndarray) -> bool:
     """np.any(A.data[positions]); in parallel, without the copy, where the compiled kernels
     serve A's size."""
+    if isinstance(A, MatrixSum):
+        return A.any_nonzero(positions)
     if compiled.serves_matrix(A.shape[0]) and not np.iscomplexobj(A.data):
         return compiled.any_nonzero(A.data, positions)
     return bool(np.any(A.data[positions]))
 
 
-def upper_triangle_positions(A: sp.csr_matrix):
+def upper_triangle_positions(A: Matrix):
     """(positions in A.data, indptr, indices) of the upper triangle of A, diagonal included,
     as a CSR pattern; A has sorted indices."""
     n = A.shape[0]
@@ -384,12 +470,12 @@ class Pardiso:
                 solver.free_memory(everything=True)
             self._analysed[mtype] = _PatternCache()
 
-    def factorise(self, A: sp.csr_matrix, symmetric: bool, definite: bool = True) -> Solve | None:
+    def factorise(self, A: Matrix, symmetric: bool, definite: bool = True) -> Solve | None:
         """A solve function for A, or None if it is singular. definite=False: a symmetric A
         is factorised as indefinite at once (``cholesky``; its inertia is then known)."""
-        if np.iscomplexobj(A.data):
+        if np.issubdtype(A.dtype, np.complexfloating):
             return self._fallback.factorise(A, symmetric)
-        A = A if A.has_sorted_indices else A.sorted_indices()
+        A = A if A.has_sorted_indices else as_csr(A).sorted_indices()
         M, mtype = A, 1
         if symmetric:
             upper = self._upper
@@ -406,9 +492,9 @@ class Pardiso:
                         return solve
                     self._cholesky_failures += 1
                     self._cholesky_pause = self.CHOLESKY_PAUSE << min(self._cholesky_failures, 10)
-        return self._factorise(A, M, mtype)
+        return self._factorise(A, as_csr(M), mtype)
 
-    def _factorise(self, A: sp.csr_matrix, M: sp.csr_matrix, mtype: int) -> Solve | None:
+    def _factorise(self, A: Matrix, M: sp.csr_matrix, mtype: int) -> Solve | None:
         """Factorise M (A's upper triangle for the symmetric types) as PARDISO's mtype."""
         from pypardiso.pardiso_wrapper import PyPardisoError
 
@@ -460,7 +546,8 @@ class Cholmod(_FreedWithTheObject):
         self._pattern = _PatternCache()
         self._fallback = SuperLU()
 
-    def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
+    def factorise(self, A: Matrix, symmetric: bool) -> Solve | None:
+        A = as_csr(A)
         if not symmetric or np.iscomplexobj(A.data):
             return self._fallback.factorise(A, symmetric)
         A_csc = A.tocsc()  # the same matrix for a symmetric one, in CHOLMOD's format
@@ -487,7 +574,8 @@ class AlgebraicMultigrid(_FreedWithTheObject):
         self._pyamg = pyamg
         self._fallback = SuperLU()
 
-    def factorise(self, A: sp.csr_matrix, symmetric: bool) -> Solve | None:
+    def factorise(self, A: Matrix, symmetric: bool) -> Solve | None:
+        A = as_csr(A)
         if not symmetric or np.iscomplexobj(A.data):
             return self._fallback.factorise(A, symmetric)
         hierarchy = self._pyamg.smoothed_aggregation_solver(A, symmetry="symmetric")
@@ -553,6 +641,6 @@ def diagonal_positions(A: sp.csr_matrix) -> np.ndarray:
     return positions
 
 
-def _row_indices(A: sp.csr_matrix) -> np.ndarray:
+def _row_indices(A: Matrix) -> np.ndarray:
     """Row of each stored entry of the CSR matrix A, (nnz,)."""
     return np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))

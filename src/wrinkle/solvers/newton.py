@@ -30,7 +30,6 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from wrinkle import compiled
 from wrinkle.solvers.base import (
     Evaluation,
     Problem,
@@ -39,9 +38,8 @@ from wrinkle.solvers.base import (
     shifted,
     stiffness_scale,
     try_evaluate,
-    with_values,
 )
-from wrinkle.solvers.linear import diagonal_positions
+from wrinkle.solvers.linear import Matrix, MatrixSum, diagonal_positions
 
 __all__ = ["RegularisedNewton"]
 
@@ -64,10 +62,13 @@ class RegularisedNewton(RegularisedSolver):
     def initial_theta(self, K: sp.csr_matrix, free: np.ndarray) -> float:
         self._scale = stiffness_scale(K, free)
         self._metric_scale: float | None = None
+        self._shifted: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         return 1e-8
 
-    def regularised(self, ev: Evaluation, theta: float, free: np.ndarray) -> sp.csr_matrix:
-        """K + theta M (module docstring) on K's own pattern."""
+    def regularised(self, ev: Evaluation, theta: float, free: np.ndarray) -> Matrix:
+        """K + theta M (module docstring) on K's own pattern; with the problem's metric L a
+        ``MatrixSum`` K + theta (s_K / s_L) L + 1e-3 theta s_K I_free, whose entries the
+        linear back-end forms where it reads them."""
         K = ev.tangent
         if ev.metric is None:
             return shifted(K, theta * self._scale, free, ev.diagonal)
@@ -77,12 +78,23 @@ class RegularisedNewton(RegularisedSolver):
             mean = float(np.mean(diagonal)) if diagonal.size else 0.0
             self._metric_scale = self._scale / mean if mean > 0.0 else 0.0
         factor, shift = theta * self._metric_scale, _IDENTITY_SHARE * theta * self._scale
-        if compiled.serves_matrix(K.shape[0]) and not np.iscomplexobj(K.data):
-            data = compiled.shifted_sum(K.data, ev.metric, factor, positions[free], shift)
-        else:
-            data = K.data + factor * ev.metric
-            data[positions[free]] += shift
-        return with_values(K, data)
+        return MatrixSum(K, ev.metric, factor, self._free_diagonal(positions, free, K.nnz), shift)
+
+    def _free_diagonal(self, positions: np.ndarray, free: np.ndarray, nnz: int) -> np.ndarray:
+        """The free dofs' diagonal entries flagged among K's nnz values, (nnz,) bool, from the
+        diagonal's positions (n_dofs,); made again only for other positions or free dofs."""
+        if self._shifted is not None:
+            known_positions, known_free, flags = self._shifted
+            if (
+                known_positions is positions
+                and flags.size == nnz
+                and np.array_equal(known_free, free)
+            ):
+                return flags
+        flags = np.zeros(nnz, dtype=bool)
+        flags[positions[free]] = True
+        self._shifted = (positions, free.copy(), flags)
+        return flags
 
     def trial_step(
         self, ev: Evaluation, theta: float, free: np.ndarray
