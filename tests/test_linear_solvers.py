@@ -173,6 +173,29 @@ def test_pardiso_symmetric_indefinite_and_general_on_one_pattern():
 
 
 @pytest.mark.skipif(not installed("pardiso"), reason="pypardiso not installed")
+def test_pardiso_converts_a_patterns_indices_once(monkeypatch):
+    """PARDISO's 1-based index arrays are made once per pattern, not at each factorisation
+    and solve, and are made again for another pattern; the solutions are pypardiso's own."""
+    import pypardiso
+
+    backend = make_linear_solver("pardiso")
+    A = spd_matrix()
+    b = np.random.default_rng(8).normal(size=A.shape[0])
+    x = backend.factorise(A, True)(b)
+    ia, ja = backend._one_based[2:]
+    np.testing.assert_array_equal(ja - 1, upper_triangle_positions(A)[2])
+    y = backend.factorise(3.0 * A, True)(b)  # the same pattern, other values
+    assert backend._one_based[2] is ia and backend._one_based[3] is ja
+    np.testing.assert_allclose(x, pypardiso.spsolve(A, b), rtol=1e-12)
+    np.testing.assert_allclose(y, x / 3.0, rtol=1e-12)
+    B = spd_matrix(seed=9)
+    z = backend.factorise(B, False)(b)
+    assert backend._one_based[2] is not ia
+    np.testing.assert_array_equal(backend._one_based[3] - 1, B.indices)
+    np.testing.assert_allclose(z, pypardiso.spsolve(B, b), rtol=1e-12)
+
+
+@pytest.mark.skipif(not installed("pardiso"), reason="pypardiso not installed")
 def test_pardiso_lets_the_mkl_threads_sleep(monkeypatch):
     """Making the PARDISO back-end sets KMP_BLOCKTIME=0 (MKL's threads sleep as soon as a
     call returns), unless the user has set it."""
