@@ -423,17 +423,17 @@ def test_gather_scatter_and_shift_kernels_equal_numpy():
     expected = data + 0.37 * other
     expected[flagged] += 2.5
     np.testing.assert_array_equal(
-        compiled.sum_take(data, other, 0.37, flagged, 2.5, positions), expected[positions]
+        compiled.sum_take((data, other, 0.37, flagged, 2.5), positions), expected[positions]
     )
     cancelling = data.copy()
     cancelling[positions] = -0.5 * other[positions]
     cancelling[flagged] -= 2.5
-    assert not compiled.sum_any_nonzero(cancelling, other, 0.5, flagged, 2.5, positions)
-    assert compiled.sum_any_nonzero(cancelling, other, 0.5, flagged, 2.0, positions)
+    assert not compiled.sum_any_nonzero((cancelling, other, 0.5, flagged, 2.5), positions)
+    assert compiled.sum_any_nonzero((cancelling, other, 0.5, flagged, 2.0), positions)
     cancelling[positions[4]] = np.nan
-    assert compiled.sum_any_nonzero(cancelling, other, 0.5, flagged, 2.5, positions)
+    assert compiled.sum_any_nonzero((cancelling, other, 0.5, flagged, 2.5), positions)
     with pytest.raises(ValueError, match="values"):
-        compiled.sum_take(data, other[:-1], 0.37, flagged, 2.5, positions)
+        compiled.sum_take((data, other[:-1], 0.37, flagged, 2.5), positions)
 
 
 @needs_numba

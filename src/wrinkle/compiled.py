@@ -952,68 +952,51 @@ def any_nonzero(data: np.ndarray, positions: np.ndarray) -> bool:
     )
 
 
-def sum_take(
-    data: np.ndarray,
-    other: np.ndarray,
-    factor: float,
-    flagged: np.ndarray,
-    shift: float,
-    positions: np.ndarray,
-) -> np.ndarray:
-    """(data + factor other, then + shift where flagged)[positions], (k,), in one parallel
-    pass without the (nnz,) sum, bit for bit as NumPy forms the sum: the values of K + theta
-    M that a back-end reads (``wrinkle.solvers.linear.MatrixSum``). data, other (nnz,)
-    float, flagged (nnz,) bool; positions (k,) integers within nnz (not checked)."""
-    _check_sum(data, other, flagged)
+SumTerms = tuple[np.ndarray, np.ndarray, float, np.ndarray, float]
+"""(data, other, factor, flagged, shift): the values data + factor other, then + shift where
+flagged, of ``sum_take`` and ``sum_any_nonzero``; data, other (nnz,) float, flagged (nnz,)
+bool."""
+
+
+def sum_take(terms: SumTerms, positions: np.ndarray) -> np.ndarray:
+    """The values of ``terms`` at positions, (k,), in one parallel pass without the (nnz,)
+    sum, bit for bit as NumPy forms the sum: the values of K + theta M that a back-end reads
+    (``wrinkle.solvers.linear.MatrixSum``); positions (k,) integers within nnz (not
+    checked)."""
     out = np.empty(positions.shape[0])
-    _compiled("sum_take")(
+    _compiled("sum_take")(*_sum_arguments(terms, positions), out)
+    return out
+
+
+def sum_any_nonzero(terms: SumTerms, positions: np.ndarray) -> bool:
+    """np.any(``sum_take``(terms, positions)) without the copies, in parallel."""
+    return bool(_compiled("sum_any_nonzero")(*_sum_arguments(terms, positions)))
+
+
+def _sum_arguments(terms: SumTerms, positions: np.ndarray) -> tuple:
+    """The arguments of the sum kernels, contiguous; ValueError unless the three (nnz,)
+    arrays have one shape (the kernels run without bounds checks)."""
+    data, other, factor, flagged, shift = terms
+    if not data.shape == other.shape == flagged.shape:
+        raise ValueError(
+            f"sum of {data.shape} values and {other.shape} values, {flagged.shape} flags"
+        )
+    return (
         np.ascontiguousarray(data, dtype=float),
         np.ascontiguousarray(other, dtype=float),
         float(factor),
         np.ascontiguousarray(flagged),
         float(shift),
         np.ascontiguousarray(positions),
-        out,
     )
-    return out
-
-
-def sum_any_nonzero(
-    data: np.ndarray,
-    other: np.ndarray,
-    factor: float,
-    flagged: np.ndarray,
-    shift: float,
-    positions: np.ndarray,
-) -> bool:
-    """np.any(``sum_take``(...)) without the copies, in parallel."""
-    _check_sum(data, other, flagged)
-    return bool(
-        _compiled("sum_any_nonzero")(
-            np.ascontiguousarray(data, dtype=float),
-            np.ascontiguousarray(other, dtype=float),
-            float(factor),
-            np.ascontiguousarray(flagged),
-            float(shift),
-            np.ascontiguousarray(positions),
-        )
-    )
-
-
-def _check_sum(data: np.ndarray, other: np.ndarray, flagged: np.ndarray) -> None:
-    """ValueError unless the three arrays of a sum have one shape (the kernels run without
-    bounds checks)."""
-    if not data.shape == other.shape == flagged.shape:
-        raise ValueError(
-            f"sum of {data.shape} values and {other.shape} values, {flagged.shape} flags"
-        )
 
 
 def transpose_positions(indptr: np.ndarray, indices: np.ndarray) -> np.ndarray:
     """The position of each entry's transpose in a CSR pattern with sorted indices, (nnz,),
-    -1 where the transpose is not stored; in parallel, by bisection within each row (the
+    -1 where the transpose is not stored; in parallel, by bisection within each row: the
     transpose map of ``wrinkle.solvers.linear.SymmetryCheck`` without SciPy's conversion to
-    CSC and back: 0.1-0.5 s -> 0.02 s at 5.9 x 10^6 entries)."""
+    CSC and back and its (nnz,) temporaries (24 ms against 29 ms warm at 5.9 x 10^6 entries,
+    benchmarks/matrix_passes.py)."""
     index = np.int32 if indices.shape[0] < np.iinfo(np.int32).max else np.int64
     out = np.empty(indices.shape[0], dtype=index)
     _compiled("transpose_positions")(

@@ -101,7 +101,7 @@ class MatrixSum:
         """A.data[positions], (k,): in one parallel pass where the compiled kernels serve A's
         size."""
         if compiled.serves_matrix(self.shape[0]):
-            return compiled.sum_take(*self._terms(), positions)
+            return compiled.sum_take(self._terms(), positions)
         values = self.K.data[positions] + self.factor * self.M[positions]
         values[self.shifted[positions]] += self.shift
         return values
@@ -109,10 +109,10 @@ class MatrixSum:
     def any_nonzero(self, positions: np.ndarray) -> bool:
         """np.any(A.data[positions]), without the copies where the kernels serve."""
         if compiled.serves_matrix(self.shape[0]):
-            return compiled.sum_any_nonzero(*self._terms(), positions)
+            return compiled.sum_any_nonzero(self._terms(), positions)
         return bool(np.any(self.values(positions)))
 
-    def _terms(self) -> tuple[np.ndarray, np.ndarray, float, np.ndarray, float]:
+    def _terms(self) -> compiled.SumTerms:
         return self.K.data, self.M, self.factor, self.shifted, self.shift
 
     def tocsr(self) -> sp.csr_matrix:
