@@ -24,28 +24,15 @@ Times in milliseconds. Run it on two source trees in turns to compare:
 from __future__ import annotations
 
 import argparse
-import time
-from collections.abc import Callable
 from pathlib import Path
 
-import numpy as np
+from timing import median_ms
 
 from wrinkle import Mesh
 from wrinkle.case import read_case
 from wrinkle.loads import boundary_edges
 
 AIRBAG = Path(__file__).resolve().parents[1] / "examples" / "airbag.toml"
-
-
-def median_ms(call: Callable[[], object], repeat: int) -> float:
-    """Median wall time of ``repeat`` calls after a first one, ms."""
-    call()
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - start)
-    return 1e3 * float(np.median(times))
 
 
 def main() -> None:
