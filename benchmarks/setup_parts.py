@@ -8,6 +8,8 @@ elements), the script times, each as the median of ``--repeat`` calls after a fi
 - ``mesh``: ``Mesh(nodes, triangles)``, whose checks find duplicate and inverted elements;
 - ``boundary edges``: ``wrinkle.loads.boundary_edges`` of every triangle, which the
   pressure's closure test (``DiscreteSystem.volume_closure``) runs;
+- ``sparsity pattern``: ``wrinkle.assembly.SparsityPattern`` of the mesh and the bending
+  energy's node pairs, the CSR pattern of every matrix of the level;
 - ``step metric``: ``DiscreteSystem.step_metric()``, the unit-tension Laplacian that the
   solver's metric and the prescribed motion's force scale are made of;
 - ``case to first problem``: the case read, its model discretised (patterns, geometry,
@@ -29,6 +31,8 @@ from pathlib import Path
 from timing import median_ms
 
 from wrinkle import Mesh
+from wrinkle.assembly import SparsityPattern
+from wrinkle.bending import Bending
 from wrinkle.case import read_case
 from wrinkle.loads import boundary_edges
 
@@ -40,13 +44,14 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[224, 704])
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
-    parts = ["mesh", "boundary edges", "step metric", "case to first problem"]
+    parts = ["mesh", "boundary edges", "sparsity pattern", "step metric", "case to first problem"]
     print(f"{'elements':>9} " + " ".join(f"{part:>22}" for part in parts) + "   (ms)")
     for n in args.sizes:
         overrides = {"mesh": {"rectangle": {"nx": n, "ny": n}}, "material": {"bending": True}}
         model = read_case(AIRBAG, overrides=overrides).model
         nodes, triangles = model.mesh.nodes, model.mesh.triangles
         system = model.discretise()
+        pairs = Bending(model.mesh, 1.0).coupled_pairs()  # the nodes the hinges couple
 
         def case_to_problem(overrides: dict = overrides) -> None:
             system = read_case(AIRBAG, overrides=overrides).model.discretise()
@@ -56,6 +61,10 @@ def main() -> None:
         times = [
             median_ms(lambda n=nodes, t=triangles: Mesh(n, t), args.repeat),
             median_ms(lambda t=triangles: boundary_edges(t), args.repeat),
+            median_ms(
+                lambda t=triangles, m=nodes.shape[0], p=pairs: SparsityPattern(t, m, p),
+                args.repeat,
+            ),
             median_ms(system.step_metric, args.repeat),
             median_ms(case_to_problem, args.repeat),
         ]

@@ -122,15 +122,19 @@ class SparsityPattern:
         index_dtype = np.int32 if self.nnz < 2**31 - 1 else np.int64
         self.indptr: npt.NDArray[np.signedinteger] = indptr.astype(index_dtype)
         i = np.arange(DOFS_PER_NODE)
-        j = np.arange(DOFS_PER_NODE)
-        # row 3a+i lists the columns 3b+j of node a's blocks (a, b) in block order: entry q of
-        # the row is entry q - indptr[3a+i] of node a's segment of ``columns``, which starts at
-        # 3 block_ptr[a]
-        columns = (DOFS_PER_NODE * block_col[:, None] + j).ravel()
-        segment_shift = indptr[:-1] - DOFS_PER_NODE * np.repeat(block_ptr[:-1], DOFS_PER_NODE)
-        self.indices: npt.NDArray[np.signedinteger] = columns[
-            np.arange(self.nnz) - np.repeat(segment_shift, row_length)
-        ].astype(index_dtype)
+        # row 3a+i lists the columns 3b+j of node a's blocks (a, b) in block order: the CSR
+        # form of the node-pair blocks as dense 3 x 3 blocks, which SciPy's conversion from
+        # BSR makes in C++ (its int8 values are dropped): 10 ms at 5.9 x 10^6 entries, against
+        # 60-400 ms for the same indices from NumPy's index arithmetic over all entries
+        blocks = sp.bsr_matrix(
+            (
+                np.ones((keys.size, DOFS_PER_NODE, DOFS_PER_NODE), dtype=np.int8),
+                block_col,
+                block_ptr,
+            ),
+            shape=(self.n_dofs, self.n_dofs),
+        ).tocsr()
+        self.indices: npt.NDArray[np.signedinteger] = blocks.indices.astype(index_dtype, copy=False)
         # (element, k, i, l, j): entry (3 a_k + i, 3 a_l + j) of block (a_k, a_l), that is
         # _position(a_k, block, i, j) = (6 start + 3 block) + i (3 degree) + j: kept as the
         # block bases (n, 9) and row steps (n, 3), 48 bytes an element instead of 324
