@@ -80,9 +80,11 @@ class Bending:
             triangles.ravel(), np.repeat(stiffness * area / 3, 3), minlength=n
         )
         weight = np.where(boundary_nodes(mesh), 0.0, nodal_stiffness / nodal_area**2)
-        nodal = (laplacian.T @ sp.diags(weight) @ laplacian).tocoo()
+        # CSR with sorted indices, no repeats (SciPy's CSR sum; its COO one sorts all the
+        # entries at once: 0.6 s at 10^6 elements)
+        nodal = (laplacian.T @ sp.diags(weight) @ laplacian).tocsr()
         nodal.sum_duplicates()
-        self.nodal = nodal.tocsr()
+        self.nodal = nodal
 
     def entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Rows, columns and values of the nonzero entries of ``nodal``, (m,) each."""
