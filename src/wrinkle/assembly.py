@@ -124,8 +124,8 @@ class SparsityPattern:
         i = np.arange(DOFS_PER_NODE)
         # row 3a+i lists the columns 3b+j of node a's blocks (a, b) in block order: the CSR
         # form of the node-pair blocks as dense 3 x 3 blocks, which SciPy's conversion from
-        # BSR makes in C++ (its int8 values are dropped): 10 ms at 5.9 x 10^6 entries, against
-        # 60-400 ms for the same indices from NumPy's index arithmetic over all entries
+        # BSR makes in C++ (its int8 values are dropped): 9-12 ms at 5.9 x 10^6 entries, against
+        # 60-680 ms for the same indices from NumPy's index arithmetic over all entries
         blocks = sp.bsr_matrix(
             (
                 np.ones((keys.size, DOFS_PER_NODE, DOFS_PER_NODE), dtype=np.int8),
