@@ -21,6 +21,7 @@ from wrinkle.solvers.linear import (
     SymmetryCheck,
     diagonal_positions,
     make_linear_solver,
+    with_values,
 )
 from wrinkle.threads import blas_threads
 from wrinkle.timing import LINEAR, Stopwatch
@@ -280,15 +281,6 @@ def shifted(
     data = K.data.astype(np.result_type(K.data, shift))
     data[diagonal[free]] += shift
     return with_values(K, data)
-
-
-def with_values(K: sp.csr_matrix, data: np.ndarray) -> sp.csr_matrix:
-    """A CSR matrix on K's pattern (shared, not copied) with the values data (nnz,); K's
-    sorted-indices flag carried over (``wrinkle.assembly.SparsityPattern.matrix`` sets it),
-    so that SciPy does not check the indices of each new matrix again."""
-    matrix = sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
-    matrix.has_sorted_indices = K.has_sorted_indices
-    return matrix
 
 
 IterationListener = Callable[[str, int, float, tuple[int, int, int]], None]
