@@ -342,6 +342,16 @@ def test_chunk_colouring_puts_no_shared_node_in_one_colour(shuffled):
     assert colours <= (n_chunks if shuffled else 4), colours
 
 
+def assemble(data, pattern, element_data, x, pressure, colouring, kept) -> None:
+    """``compiled.assemble_stiffness`` into data on pattern's positions; element_data =
+    (area, F, grad, tangent, stress) as ``random_element_data`` gives them."""
+    area, F, grad, tangent, stress = element_data
+    positions = (pattern.element_block_base, pattern.element_row_step)
+    compiled.assemble_stiffness(
+        data, positions, area, F, grad, tangent, stress, x, pressure, colouring, kept
+    )
+
+
 @needs_numba
 @pytest.mark.parametrize("shuffled", [False, True])
 def test_assembled_stiffness_equals_element_matrices_scattered(shuffled):
@@ -364,20 +374,36 @@ def test_assembled_stiffness_equals_element_matrices_scattered(shuffled):
     expected = before + pattern.assemble_data(K)
     data = before.copy()
     colouring = chunk_colouring(triangles, n_nodes, chunk=64)
-    compiled.assemble_stiffness(
-        data,
-        (pattern.element_block_base, pattern.element_row_step),
-        area,
-        F,
-        grad,
-        tangent,
-        stress,
-        x,
-        pressure,
-        colouring,
-        kept,
-    )
+    assemble(data, pattern, (area, F, grad, tangent, stress), x, pressure, colouring, kept)
     np.testing.assert_allclose(data, expected, rtol=1e-13, atol=1e-13 * np.abs(expected).max())
+
+
+@needs_numba
+def test_assembled_entries_are_the_element_kernels_bit_for_bit():
+    """On triangles that share no node each stored entry receives one element's value: the
+    assembly's entries, formed only where kept (without pressure) or from the whole matrix
+    (with it), are those of ``compiled.element_stiffness`` minus the pressure's load
+    stiffness to the last bit."""
+    m = 300
+    triangles = np.arange(3 * m).reshape(m, 3)
+    pattern = SparsityPattern(triangles, 3 * m)
+    area, F, grad, tangent, stress = random_element_data(m, seed=17)
+    rng = np.random.default_rng(18)
+    x = rng.normal(size=(m, 3, 3))
+    pressure = np.where(rng.random(m) < 0.5, 0.0, rng.normal(size=m))
+    kept = (rng.random(pattern.n_dofs) < 0.7)[pattern.element_dofs]
+    K = np.empty((m, 9, 9))
+    compiled.element_stiffness(area, F, grad, tangent, stress, K)
+    compiled.subtract_pressure_stiffness(K, x, pressure)
+    before = rng.normal(size=pattern.nnz)
+    data = before.copy()
+    colouring = chunk_colouring(triangles, 3 * m, chunk=64)
+    assemble(data, pattern, (area, F, grad, tangent, stress), x, pressure, colouring, kept)
+    mask = kept[:, :, None] & kept[:, None, :]
+    expected = before + pattern.assemble_data(np.where(mask, K, 0.0))
+    np.testing.assert_array_equal(data, expected)
+    untouched = pattern.assemble_data(mask.astype(float)) == 0.0
+    np.testing.assert_array_equal(data[untouched], before[untouched])
 
 
 @needs_numba
