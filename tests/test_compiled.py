@@ -379,18 +379,19 @@ def test_assembled_stiffness_equals_element_matrices_scattered(shuffled):
 
 
 @needs_numba
-def test_assembled_entries_are_the_element_kernels_bit_for_bit():
+@pytest.mark.parametrize("pressed", [False, True])
+def test_assembled_entries_are_the_element_kernels_bit_for_bit(pressed):
     """On triangles that share no node each stored entry receives one element's value: the
-    assembly's entries, formed only where kept (without pressure) or from the whole matrix
-    (with it), are those of ``compiled.element_stiffness`` minus the pressure's load
-    stiffness to the last bit."""
+    assembly's entries, formed only where kept (no element pressurised) or from the whole
+    matrix (some are), are those of ``compiled.element_stiffness`` minus the pressure's
+    load stiffness to the last bit."""
     m = 300
     triangles = np.arange(3 * m).reshape(m, 3)
     pattern = SparsityPattern(triangles, 3 * m)
     area, F, grad, tangent, stress = random_element_data(m, seed=17)
     rng = np.random.default_rng(18)
     x = rng.normal(size=(m, 3, 3))
-    pressure = np.where(rng.random(m) < 0.5, 0.0, rng.normal(size=m))
+    pressure = np.where(rng.random(m) < 0.5, 0.0, rng.normal(size=m)) * pressed
     kept = (rng.random(pattern.n_dofs) < 0.7)[pattern.element_dofs]
     K = np.empty((m, 9, 9))
     compiled.element_stiffness(area, F, grad, tangent, stress, K)
