@@ -155,24 +155,12 @@ def _element_stiffness(area, F, shape_gradient, tangent, stress, out):
 def _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, out):
     """out (9, 9) = element e's matrix of ``_element_stiffness``, with B and DB (3, 9) as
     scratch."""
-    a = area[e]
-    for k in range(3):  # B of wrinkle.element.strain_displacement
-        g0, g1 = shape_gradient[e, k, 0], shape_gradient[e, k, 1]
-        for i in range(3):
-            F0, F1 = F[e, i, 0], F[e, i, 1]
-            B[0, 3 * k + i] = g0 * F0
-            B[1, 3 * k + i] = g1 * F1
-            B[2, 3 * k + i] = g1 * F0 + g0 * F1
-    # the row's factors are read into scalars first: the compiler then keeps them in
-    # registers over the loop on c (twice as fast as indexing B and D inside it)
-    for r in range(3):  # A0 D B
-        t0, t1, t2 = tangent[e, r, 0], tangent[e, r, 1], tangent[e, r, 2]
-        for c in range(9):
-            DB[r, c] = a * (t0 * B[0, c] + t1 * B[1, c] + t2 * B[2, c])
+    _strain_factors_at(e, area, F, shape_gradient, tangent, B, DB)
     for r in range(9):
         b0, b1, b2 = B[0, r], B[1, r], B[2, r]
         for c in range(9):
             out[r, c] = b0 * DB[0, c] + b1 * DB[1, c] + b2 * DB[2, c]
+    a = area[e]
     N00, N11, N01 = a * stress[e, 0, 0], a * stress[e, 1, 1], a * stress[e, 0, 1]
     for k in range(3):  # geometric part, G_kl = grad psi_k . A0 N grad psi_l
         v0 = N00 * shape_gradient[e, k, 0] + N01 * shape_gradient[e, k, 1]
@@ -185,9 +173,8 @@ def _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, ou
 
 def _strain_factors_at(e, area, F, shape_gradient, tangent, B, DB):
     """B and DB = A0 D B (3, 9) of element e, written into B and DB: entry (r, c) of the
-    material part of its matrix (``_element_stiffness``) is B[:, r] . DB[:, c]. The same
-    lines open ``_element_stiffness_at``: called from there instead, they made the airbag's
-    assembly 15 % slower (8.4-8.8 -> 9.8-10.1 ms, benchmarks/stiffness_assembly.py)."""
+    material part of its matrix (``_element_stiffness``) is B[:, r] . DB[:, c]. Inlined
+    by Numba where it is called (``_make_kernels``)."""
     a = area[e]
     for k in range(3):  # B of wrinkle.element.strain_displacement
         g0, g1 = shape_gradient[e, k, 0], shape_gradient[e, k, 1]
@@ -738,7 +725,10 @@ def _make_kernels() -> None:
     parallel = numba.njit(cache=True, boundscheck=False, parallel=True)
     # (py_func: the plain function, should the helpers have been compiled before)
     _wrinkled_tangent_at = jit(getattr(_wrinkled_tangent_at, "py_func", _wrinkled_tangent_at))
-    _strain_factors_at = jit(getattr(_strain_factors_at, "py_func", _strain_factors_at))
+    # inlined in Numba's IR: as a call, the airbag's assembly took 15 % longer
+    _strain_factors_at = numba.njit(cache=True, boundscheck=False, inline="always")(
+        getattr(_strain_factors_at, "py_func", _strain_factors_at)
+    )
     _element_stiffness_at = jit(getattr(_element_stiffness_at, "py_func", _element_stiffness_at))
     _svk_state_at = jit(getattr(_svk_state_at, "py_func", _svk_state_at))
     _subtract_pressure_at = jit(getattr(_subtract_pressure_at, "py_func", _subtract_pressure_at))
