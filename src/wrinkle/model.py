@@ -36,6 +36,7 @@ from wrinkle.kinematics import (
 )
 from wrinkle.loads import boundary_edges, edge_dead_forces, edge_follower_forces
 from wrinkle.materials.base import Material
+from wrinkle.memory import kept_memory
 from wrinkle.mesh import Mesh
 from wrinkle.post import support_moments, support_reactions
 from wrinkle.results import Results, StepResult
@@ -1015,9 +1016,10 @@ class Model:
 
         solver = settings.solver()
         try:
-            results.end = self._follow(
-                system, settings, solver, u0, record, results, first_guess, probes, resume
-            )
+            with kept_memory():  # the freed arrays' pages kept from step to step
+                results.end = self._follow(
+                    system, settings, solver, u0, record, results, first_guess, probes, resume
+                )
         except ConvergenceError as error:
             error.results = results
             raise

@@ -14,6 +14,7 @@ from typing import Any, Protocol
 import numpy as np
 import scipy.sparse as sp
 
+from wrinkle.memory import kept_memory
 from wrinkle.solvers.linear import (
     FreeBlock,
     Matrix,
@@ -505,8 +506,9 @@ class RegularisedSolver(ABC):
         at_start: problem's evaluation at u0 if the caller has it, with or without stiffness;
         a start already in balance then costs no evaluation of the stiffness. stop: a rule
         that may end the solve before the residual test (``StopRule``), asked after each
-        accepted iteration. OpenBLAS runs on ``blas_threads`` threads meanwhile."""
-        with blas_threads(self.blas_threads):
+        accepted iteration. OpenBLAS runs on ``blas_threads`` threads meanwhile, and freed
+        memory stays with the process (``wrinkle.memory``)."""
+        with blas_threads(self.blas_threads), kept_memory():
             return self._solve(problem, u0, at_start, stop)
 
     def _solve(

@@ -41,6 +41,7 @@ from typing import Protocol
 
 import numpy as np
 
+from wrinkle.memory import kept_memory
 from wrinkle.solvers.base import (
     ConvergenceError,
     Evaluation,
@@ -200,8 +201,9 @@ def solve_bordered(
     ``ResidualMerit``; a merit with a potential, such as the Lagrangian of volume
     control, finds the inflated shape from a flat sheet where the residual cannot). Raises
     ConvergenceError if it fails, InadmissibleState if it balances in a state that is not
-    physical. OpenBLAS runs on ``solver.blas_threads`` threads meanwhile."""
-    with blas_threads(solver.blas_threads):
+    physical. OpenBLAS runs on ``solver.blas_threads`` threads meanwhile, and freed memory
+    stays with the process (``wrinkle.memory``)."""
+    with blas_threads(solver.blas_threads), kept_memory():
         return _solve_bordered(family, constraint, u0, mu0, solver, timer_owner, merit)
 
 
