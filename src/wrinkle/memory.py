@@ -26,6 +26,7 @@ are restored when the last of them ends.
 from __future__ import annotations
 
 import ctypes
+import functools
 import platform
 import threading
 from collections.abc import Callable, Iterator
@@ -50,9 +51,10 @@ _depth = 0  # solves inside kept_memory now
 _restore: list[Callable[[], None]] = []  # what leaving the outermost does, in reverse
 
 
+@functools.cache
 def _glibc() -> Any:
     """The C library's handle where it is glibc (None otherwise, or where it cannot be
-    loaded)."""
+    loaded); found once."""
     if platform.system() != "Linux" or platform.libc_ver()[0] != "glibc":
         return None
     try:
