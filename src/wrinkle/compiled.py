@@ -148,27 +148,37 @@ def _element_stiffness(area, F, shape_gradient, tangent, stress, out):
     for chunk in prange((n + _CHUNK - 1) // _CHUNK):
         B = np.empty((3, 9))
         DB = np.empty((3, 9))
+        G = np.empty((3, 3))
         for e in range(chunk * _CHUNK, min(n, (chunk + 1) * _CHUNK)):
-            _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, out[e])
+            _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, G, out[e])
 
 
-def _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, out):
-    """out (9, 9) = element e's matrix of ``_element_stiffness``, with B and DB (3, 9) as
-    scratch."""
+def _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, G, out):
+    """out (9, 9) = element e's matrix of ``_element_stiffness``, with B and DB (3, 9) and
+    G (3, 3) as scratch."""
     _strain_factors_at(e, area, F, shape_gradient, tangent, B, DB)
     for r in range(9):
         b0, b1, b2 = B[0, r], B[1, r], B[2, r]
         for c in range(9):
             out[r, c] = b0 * DB[0, c] + b1 * DB[1, c] + b2 * DB[2, c]
+    _geometric_factors_at(e, area, shape_gradient, stress, G)
+    for k in range(3):
+        for m in range(3):
+            for i in range(3):
+                out[3 * k + i, 3 * m + i] += G[k, m]
+
+
+def _geometric_factors_at(e, area, shape_gradient, stress, G):
+    """G (3, 3) of element e, written into G: G_kl = grad psi_k . A0 N grad psi_l, its
+    geometric (initial-stress) matrix being G (x) I3. Inlined by Numba where it is called
+    (``_make_kernels``)."""
     a = area[e]
     N00, N11, N01 = a * stress[e, 0, 0], a * stress[e, 1, 1], a * stress[e, 0, 1]
-    for k in range(3):  # geometric part, G_kl = grad psi_k . A0 N grad psi_l
+    for k in range(3):
         v0 = N00 * shape_gradient[e, k, 0] + N01 * shape_gradient[e, k, 1]
         v1 = N01 * shape_gradient[e, k, 0] + N11 * shape_gradient[e, k, 1]
         for m in range(3):
-            G = shape_gradient[e, m, 0] * v0 + shape_gradient[e, m, 1] * v1
-            for i in range(3):
-                out[3 * k + i, 3 * m + i] += G
+            G[k, m] = shape_gradient[e, m, 0] * v0 + shape_gradient[e, m, 1] * v1
 
 
 def _strain_factors_at(e, area, F, shape_gradient, tangent, B, DB):
@@ -240,7 +250,7 @@ def _assemble_stiffness(
             K = np.empty((9, 9))
             if pressed:  # each element's whole matrix, its pressure stiffness subtracted
                 for e in range(chunk_start[chunk], chunk_start[chunk + 1]):
-                    _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, K)
+                    _element_stiffness_at(e, area, F, shape_gradient, tangent, stress, B, DB, G, K)
                     if pressure[e] != 0.0:
                         _subtract_pressure_at(K, x, e, pressure[e])
                     for k in range(3):
@@ -258,13 +268,7 @@ def _assemble_stiffness(
             # it (the rectangle, every z held, keeps 36 of 81)
             for e in range(chunk_start[chunk], chunk_start[chunk + 1]):
                 _strain_factors_at(e, area, F, shape_gradient, tangent, B, DB)
-                a = area[e]
-                N00, N11, N01 = a * stress[e, 0, 0], a * stress[e, 1, 1], a * stress[e, 0, 1]
-                for k in range(3):  # the geometric part of _element_stiffness_at
-                    v0 = N00 * shape_gradient[e, k, 0] + N01 * shape_gradient[e, k, 1]
-                    v1 = N01 * shape_gradient[e, k, 0] + N11 * shape_gradient[e, k, 1]
-                    for m in range(3):
-                        G[k, m] = shape_gradient[e, m, 0] * v0 + shape_gradient[e, m, 1] * v1
+                _geometric_factors_at(e, area, shape_gradient, stress, G)
                 for k in range(3):
                     for i in range(3):
                         r = 3 * k + i
@@ -719,15 +723,17 @@ def _make_kernels() -> None:
     import numba
 
     global prange, _wrinkled_tangent_at, _element_stiffness_at, _svk_state_at
-    global _subtract_pressure_at, _strain_factors_at
+    global _subtract_pressure_at, _strain_factors_at, _geometric_factors_at
     prange = numba.prange
     jit = numba.njit(cache=True, boundscheck=False)
     parallel = numba.njit(cache=True, boundscheck=False, parallel=True)
     # (py_func: the plain function, should the helpers have been compiled before)
     _wrinkled_tangent_at = jit(getattr(_wrinkled_tangent_at, "py_func", _wrinkled_tangent_at))
     # inlined in Numba's IR: as a call, the airbag's assembly took 15 % longer
-    _strain_factors_at = numba.njit(cache=True, boundscheck=False, inline="always")(
-        getattr(_strain_factors_at, "py_func", _strain_factors_at)
+    inlined = numba.njit(cache=True, boundscheck=False, inline="always")
+    _strain_factors_at = inlined(getattr(_strain_factors_at, "py_func", _strain_factors_at))
+    _geometric_factors_at = inlined(
+        getattr(_geometric_factors_at, "py_func", _geometric_factors_at)
     )
     _element_stiffness_at = jit(getattr(_element_stiffness_at, "py_func", _element_stiffness_at))
     _svk_state_at = jit(getattr(_svk_state_at, "py_func", _svk_state_at))
