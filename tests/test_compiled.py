@@ -559,6 +559,29 @@ def test_deferred_stiffness_is_the_one_formed_at_once(monkeypatch, bending):
 
 
 @needs_numba
+@pytest.mark.parametrize("bending", [False, True])
+@pytest.mark.parametrize("defer", [False, True])
+def test_constrained_rows_left_unwritten_are_zero_without_zeroing(monkeypatch, bending, defer):
+    """Where the compiled assembly adds only the free rows and columns, the tangent's
+    constrained rows and columns are not zeroed again: they are exactly those of the whole
+    tangent (``keep_constrained``) with its constrained rows and columns zeroed and their
+    diagonal one, bit for bit, its free entries too; with bending, which adds to them, they
+    are zeroed as before."""
+    monkeypatch.setenv("WRINKLE_NUMBA", "1")
+    model, u = bulged_airbag(24, bending)
+    problem = model.discretise().at(1.0)
+    K = problem.evaluate(u, defer=defer).with_stiffness().stiffness
+    whole = problem.evaluate(u, keep_constrained=True).stiffness
+    pattern = model.discretise().pattern
+    positions = pattern.constraint_positions(model.constrained)
+    assert np.any(whole.data[positions])  # there is something to zero
+    expected = whole.data.copy()
+    expected[positions] = 0.0
+    expected[pattern.diagonal[model.constrained]] = 1.0
+    np.testing.assert_array_equal(K.data, expected)
+
+
+@needs_numba
 def test_stiffness_formed_at_once_where_it_cannot_be_deferred(monkeypatch):
     """With a lift or the constrained rows kept, and on the NumPy kernels, ``defer`` gives
     the stiffness at once."""
