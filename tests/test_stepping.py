@@ -175,6 +175,53 @@ def test_a_failed_descent_falls_back_to_cutting_back():
     assert solver.trials == [0.25, 1.0, 0.75, 0.5, 0.25]
 
 
+class NeedsIterations:
+    """A flat sheet that needs ``needed`` iterations from the reference state (zero
+    displacements) at any load factor, and 5 from any other start; its limit is the method's
+    default (100) unless ``default`` is False. Records (load factor, limit) of each solve."""
+
+    tolerance = 1e-6
+    tangent_predictor = False
+    max_iterations = 100
+
+    def __init__(self, needed, default=True):
+        self.needed, self.limit_is_default = needed, default
+        self.calls = []
+
+    def solve(self, problem, start, at_start=None, iterations=None):
+        limit = self.max_iterations if iterations is None else iterations
+        self.calls.append((round(problem.load_factor, 12), limit))
+        needed = self.needed if not np.any(start) else 5
+        if needed > limit:
+            raise ConvergenceError(f"not converged in {limit} iterations", [])
+        return SolverResult(np.full(start.size, problem.load_factor), needed, [], at_start)
+
+
+def test_the_end_of_the_path_from_the_reference_state_gets_four_times_the_iterations():
+    """Worked by hand, a solve from rest needing 250 iterations: in one step the end of the
+    path is solved once with 4 x 100; in 4 steps the first step (100) fails, the look-ahead
+    solves the end with 400 and the levels below it with 100 each, from the level above."""
+    solver = NeedsIterations(250)
+    follow_load_path(FakeLevels(), solver, SolverSettings(steps=1).controller())
+    assert solver.calls == [(1.0, 400)]
+    solver = NeedsIterations(250)
+    follow_load_path(FakeLevels(), solver, SolverSettings(steps=4).controller())
+    assert solver.calls == [(0.25, 100), (1.0, 400), (0.75, 100), (0.5, 100), (0.25, 100)]
+
+
+def test_a_limit_set_by_the_user_or_a_start_away_from_rest_is_kept():
+    """With max_iterations given, or from a start that is not the reference state, the end
+    of the path has the solver's own limit: the solve from rest needing 250 fails and is cut
+    back (to the minimum step, failing there too); the one from elsewhere takes 5."""
+    solver = NeedsIterations(250, default=False)
+    with pytest.raises(ConvergenceError, match="not converged in 100"):
+        follow_load_path(FakeLevels(), solver, SolverSettings(steps=1, min_step=0.2).controller())
+    assert solver.calls == [(1.0, 100), (0.5, 100), (0.25, 100)]
+    solver = NeedsIterations(250)
+    follow_load_path(FakeLevels(), solver, SolverSettings().controller(), u0=np.ones(3))
+    assert solver.calls == [(1.0, 100)]
+
+
 def test_failure_below_min_step_reports_where_it_stopped():
     solver = FakeSolver(largest=0.05, iterations=1)
     settings = SolverSettings(steps=1, min_step=0.1)  # the first step is the end: no look-ahead

@@ -357,6 +357,8 @@ class RegularisedSolver(ABC):
     ):
         if not tolerance > 0:
             raise ValueError(f"solver tolerance must be > 0, got {tolerance}")
+        #: whether max_iterations is the method's default (not the user's own limit)
+        self.limit_is_default = max_iterations is None
         if max_iterations is None:
             max_iterations = self.default_max_iterations
         if int(max_iterations) < 1:
@@ -501,15 +503,18 @@ class RegularisedSolver(ABC):
         u0: np.ndarray,
         at_start: Evaluation | None = None,
         stop: StopRule | None = None,
+        iterations: int | None = None,
     ) -> SolverResult:
         """Solve from u0 (prescribed values already set); raise ConvergenceError if it fails.
         at_start: problem's evaluation at u0 if the caller has it, with or without stiffness;
         a start already in balance then costs no evaluation of the stiffness. stop: a rule
         that may end the solve before the residual test (``StopRule``), asked after each
-        accepted iteration. OpenBLAS runs on ``blas_threads`` threads meanwhile, and freed
+        accepted iteration. iterations: the most iterations of this solve (None:
+        ``max_iterations``). OpenBLAS runs on ``blas_threads`` threads meanwhile, and freed
         memory stays with the process (``wrinkle.memory``)."""
+        limit = self.max_iterations if iterations is None else int(iterations)
         with blas_threads(self.blas_threads), kept_memory():
-            return self._solve(problem, u0, at_start, stop)
+            return self._solve(problem, u0, at_start, stop, limit)
 
     def _solve(
         self,
@@ -517,8 +522,9 @@ class RegularisedSolver(ABC):
         u0: np.ndarray,
         at_start: Evaluation | None,
         stop: StopRule | None,
+        limit: int,
     ) -> SolverResult:
-        """``solve``."""
+        """``solve`` in at most ``limit`` iterations."""
         self.time_with(problem)
         u = np.array(u0, dtype=float)
         if at_start is not None and is_converged(at_start, self.tolerance):
@@ -534,7 +540,7 @@ class RegularisedSolver(ABC):
         history = [ev.residual_norm]
         theta = self.initial_theta(ev.tangent, problem.free)
         accepted = AcceptedStep(ev.energy, math.nan, math.nan, False, theta, u, ev)
-        for iteration in range(self.max_iterations + 1):
+        for iteration in range(limit + 1):
             log_iteration(self.method, iteration, ev, theta)
             if is_converged(ev, self.tolerance):
                 self._refuse_inadmissible(ev, history)
@@ -545,7 +551,7 @@ class RegularisedSolver(ABC):
                     self._refuse_inadmissible(ev, history)
                     logger.info("%s: stopped by the accuracy rule: %s", self.method, report)
                     return SolverResult(u, iteration, history, ev, "accuracy", report)
-            if iteration == self.max_iterations:
+            if iteration == limit:
                 break
             for _ in range(self.max_rejections):
                 step_theta = theta
@@ -578,7 +584,7 @@ class RegularisedSolver(ABC):
             history.append(ev.residual_norm)
             accepted = AcceptedStep(ev.energy, predicted, rho, full, step_theta, u, ev)
         raise ConvergenceError(
-            f"{self.method}: not converged in {self.max_iterations} iterations "
+            f"{self.method}: not converged in {limit} iterations "
             f"(residual {ev.residual_norm:.3e}, needed {self.tolerance * ev.force_scale:.3e})",
             history,
         )

@@ -60,6 +60,12 @@ LIMIT_SLOPE = 0.05
 # before's has jumped across a limit point to another branch (approaching a maximum of the
 # load with cut-back steps, the slope falls by 2-4 times a step)
 JUMP = 10.0
+# A solve of the end of the path from the unstressed reference state (the first step where it
+# is the whole path, and the look-ahead's) may take this many times the method's default
+# iterations: cutting it back would give it a smaller load from the same state, which is no
+# easier there (a flat sheet under a smaller pressure is harder; docs/solvers.md, "The step
+# controller")
+END_ROUNDS = 4
 
 
 class SteppedProblem(Problem, Protocol):
@@ -228,6 +234,17 @@ def tangent_prediction(
     return None if step is None else u + lift + step
 
 
+def _end_iterations(solver: RegularisedSolver, u: np.ndarray) -> int | None:
+    """The iteration limit of a solve of the end of the path from u (n_dofs,): END_ROUNDS
+    times the solver's where u is the reference state and the limit is the method's default;
+    None (the solver's own) otherwise, a limit the user set included."""
+    if np.any(u) or not getattr(solver, "limit_is_default", False):
+        return None
+    limit = END_ROUNDS * solver.max_iterations
+    logger.info("the end of the path from the reference state: up to %d iterations", limit)
+    return limit
+
+
 def solve_step(
     problem: SteppedProblem,
     u: np.ndarray,
@@ -235,6 +252,7 @@ def solve_step(
     predicted: np.ndarray | None = None,
     trusted: bool = False,
     stop: StopRule | None = None,
+    iterations: int | None = None,
 ) -> SolverResult:
     """Solve one load level from the displacements u (n_dofs,).
 
@@ -245,8 +263,10 @@ def solve_step(
     u if the guess is in balance already (one evaluation of the forces) or its out-of-balance
     force is smaller (two), or, if ``trusted`` (a solution of a coarser mesh), always.
     stop: a rule that may end the solve before the residual test, used from a trusted guess
-    only (``wrinkle.solvers.stopping``). Raises ConvergenceError if the solver fails.
+    only (``wrinkle.solvers.stopping``). iterations: the most iterations of the solve (None:
+    the solver's ``max_iterations``). Raises ConvergenceError if the solver fails.
     """
+    options: dict[str, Any] = {} if iterations is None else {"iterations": iterations}
     constrained = ~problem.free
     start = np.where(constrained, problem.prescribed, u)
     source = "extrapolated displacements"
@@ -259,14 +279,14 @@ def solve_step(
         at_guess = try_evaluate(problem, guess, stiffness=False)
         if at_guess is not None and trusted:
             logger.info("load factor %.6g starts from the coarser mesh", problem.load_factor)
-            return solver.solve(problem, guess, at_guess, stop=stop)
+            return solver.solve(problem, guess, at_guess, stop=stop, **options)
         if at_guess is not None:
             if not is_converged(at_guess, solver.tolerance):
                 at_start = try_evaluate(problem, start, stiffness=False)
             if at_start is None or at_guess.residual_norm < at_start.residual_norm:
                 logger.info("load factor %.6g starts from the %s", problem.load_factor, source)
                 start, at_start = guess, at_guess
-    return solver.solve(problem, start, at_start)
+    return solver.solve(problem, start, at_start, **options)
 
 
 OnStep = Callable[[float, np.ndarray, SolverResult], None]
@@ -342,9 +362,16 @@ def _from_the_end(
     problem = _problem_at(system, 1.0, timer)
     predicted = None if first_guess is None else first_guess(1.0)
     stop = None if predicted is None or first_stop is None else first_stop(1.0)
+    iterations = None if predicted is not None else _end_iterations(solver, u)
     try:
         solved = solve_step(
-            problem, u, solver, predicted=predicted, trusted=predicted is not None, stop=stop
+            problem,
+            u,
+            solver,
+            predicted=predicted,
+            trusted=predicted is not None,
+            stop=stop,
+            iterations=iterations,
         )
     except ConvergenceError:
         logger.info("the end of the path failed as well; cutting the first step back")
@@ -532,7 +559,9 @@ def follow_load_path(
     If the first step fails and ``controller.look_ahead``, load factor 1 is solved from the
     start, and the levels below it downwards (``descend``); if both succeed they are the
     path, reported in increasing load factor; otherwise the first step is cut back as any
-    failed step is.
+    failed step is. A solve of the end of the path from the reference state (this one, or
+    the first step where it is the whole path) may take END_ROUNDS times the method's default
+    iterations (``_end_iterations``).
     on_step(load_factor, u, solved) is called after each converged step (u (n_dofs,), solved
     the ``SolverResult``); timer: a stopwatch the problems share (the time of their parts);
     first_guess(load_factor): a start for the first step, (n_dofs,), or None, such as the
@@ -575,8 +604,19 @@ def follow_load_path(
             if trusted and first_stop is not None:
                 stop = first_stop(trial_factor)
         checks = (solver, problem) if stability else None
+        iterations = None
+        if previous is None and not trusted and trial_factor >= 1.0 - _END:
+            iterations = _end_iterations(solver, u)  # the whole path in one step
         try:
-            solved = solve_step(problem, u, solver, predicted=predicted, trusted=trusted, stop=stop)
+            solved = solve_step(
+                problem,
+                u,
+                solver,
+                predicted=predicted,
+                trusted=trusted,
+                stop=stop,
+                iterations=iterations,
+            )
             _check_state(solved, trial_factor, slope, checks)
         except ConvergenceError as error:
             if previous is None and trial_factor >= 1.0 - _END:
