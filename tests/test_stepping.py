@@ -284,8 +284,9 @@ def test_model_solve_takes_the_controller_settings():
 def test_a_path_under_pressure_that_reaches_no_level_names_the_remedy(case_file, bending, hint):
     """An airbag (8 x 8 quarter mesh) whose Newton is allowed 2 iterations converges at no
     load level: the error says that a pressure on a flat sheet is harder the smaller it is and
-    names the bending stiffness; not where the sheet has its bending stiffness already, nor
-    for the pulled-node fan, moved by its support alone, which fails the same way."""
+    names the iteration limit and the bending stiffness; not where the sheet has its bending
+    stiffness already, nor for the pulled-node fan, moved by its support alone, which fails
+    the same way."""
     path = Path(__file__).resolve().parents[1] / case_file
     overrides = {
         "mesh": {"rectangle": {"nx": 8, "ny": 8}},
@@ -296,6 +297,7 @@ def test_a_path_under_pressure_that_reaches_no_level_names_the_remedy(case_file,
         read_case(path, overrides).solve()
     assert ("bending = true" in str(caught.value)) == hint
     assert ("harder the smaller" in str(caught.value)) == hint
+    assert ("raise [solver] max_iterations" in str(caught.value)) == hint
     assert caught.value.reached == 0.0
 
 

@@ -96,8 +96,9 @@ class LoadLevels(Protocol):
 # the step controller): the cut-backs of the first step went down to min_step in vain
 SMALL_PRESSURE_HINT = (
     "no load level converged; on a membrane that starts flat and unstressed a pressure is "
-    "harder the smaller it is, so cutting the step back does not help: give the sheet its "
-    "bending stiffness ([material] bending = true; docs/solvers.md, Load stepping)"
+    "harder the smaller it is, so cutting the step back does not help: raise [solver] "
+    "max_iterations (a small pressure creeps to its answer) or give the sheet its bending "
+    "stiffness ([material] bending = true; docs/solvers.md, Load stepping)"
 )
 
 
