@@ -209,6 +209,28 @@ def test_the_end_of_the_path_from_the_reference_state_gets_four_times_the_iterat
     assert solver.calls == [(0.25, 100), (1.0, 400), (0.75, 100), (0.5, 100), (0.25, 100)]
 
 
+def test_the_end_of_the_path_on_a_larger_mesh_gets_iterations_by_its_size():
+    """Worked by hand: with 40,000 free unknowns the end of the path from rest may take
+    10 sqrt(40,000) = 2,000 iterations (more than 4 x 100), so a solve needing 1,000 (the
+    40,394-element gmsh airbag needed 1,022) converges at once; one needing 2,100 fails and
+    is cut back with 100 a solve. A user's limit keeps 100."""
+
+    class Larger(FakeLevels):
+        n_dofs = 40_000
+
+    solver = NeedsIterations(1000)
+    follow_load_path(Larger(), solver, SolverSettings(steps=1).controller())
+    assert solver.calls == [(1.0, 2000)]
+    solver = NeedsIterations(2100)
+    with pytest.raises(ConvergenceError, match="not converged in 100"):
+        follow_load_path(Larger(), solver, SolverSettings(steps=1, min_step=0.2).controller())
+    assert solver.calls == [(1.0, 2000), (0.5, 100), (0.25, 100)]
+    solver = NeedsIterations(1000, default=False)
+    with pytest.raises(ConvergenceError, match="not converged in 100"):
+        follow_load_path(Larger(), solver, SolverSettings(steps=1, min_step=0.5).controller())
+    assert solver.calls == [(1.0, 100), (0.5, 100)]
+
+
 def test_a_limit_set_by_the_user_or_a_start_away_from_rest_is_kept():
     """With max_iterations given, or from a start that is not the reference state, the end
     of the path has the solver's own limit: the solve from rest needing 250 fails and is cut

@@ -17,6 +17,7 @@ the problem harder, not easier. The other path followers, arc length
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -66,6 +67,12 @@ JUMP = 10.0
 # easier there (a flat sheet under a smaller pressure is harder; docs/solvers.md, "The step
 # controller")
 END_ROUNDS = 4
+# ... or, where more, this many times the square root of the free unknowns: a pure
+# membrane's folds creep about a third of an element per iteration, so the iterations from
+# the flat sheet grow like 1/h, the square root of the mesh's size (up to 7 sqrt(n) measured
+# from 800 to 61,000 free unknowns, 24 % apart in two runs of one case;
+# docs/notes/2026-12-hard-cases.md, section 4f)
+END_PER_ROOT = 10.0
 
 
 class SteppedProblem(Problem, Protocol):
@@ -235,13 +242,15 @@ def tangent_prediction(
     return None if step is None else u + lift + step
 
 
-def _end_iterations(solver: RegularisedSolver, u: np.ndarray) -> int | None:
-    """The iteration limit of a solve of the end of the path from u (n_dofs,): END_ROUNDS
-    times the solver's where u is the reference state and the limit is the method's default;
-    None (the solver's own) otherwise, a limit the user set included."""
+def _end_iterations(solver: RegularisedSolver, u: np.ndarray, free: np.ndarray) -> int | None:
+    """The iteration limit of a solve of the end of the path from u (n_dofs,), free (n_dofs,)
+    bool its free components: the larger of END_ROUNDS times the solver's and END_PER_ROOT
+    sqrt(n), n the free components, where u is the reference state and the limit is the
+    method's default; None (the solver's own) otherwise, a limit the user set included."""
     if np.any(u) or not getattr(solver, "limit_is_default", False):
         return None
-    limit = END_ROUNDS * solver.max_iterations
+    by_size = math.ceil(END_PER_ROOT * math.sqrt(np.count_nonzero(free)))
+    limit = max(END_ROUNDS * solver.max_iterations, by_size)
     logger.info("the end of the path from the reference state: up to %d iterations", limit)
     return limit
 
@@ -363,7 +372,7 @@ def _from_the_end(
     problem = _problem_at(system, 1.0, timer)
     predicted = None if first_guess is None else first_guess(1.0)
     stop = None if predicted is None or first_stop is None else first_stop(1.0)
-    iterations = None if predicted is not None else _end_iterations(solver, u)
+    iterations = None if predicted is not None else _end_iterations(solver, u, problem.free)
     try:
         solved = solve_step(
             problem,
@@ -562,7 +571,8 @@ def follow_load_path(
     path, reported in increasing load factor; otherwise the first step is cut back as any
     failed step is. A solve of the end of the path from the reference state (this one, or
     the first step where it is the whole path) may take END_ROUNDS times the method's default
-    iterations (``_end_iterations``).
+    iterations, or END_PER_ROOT times the square root of the free unknowns where more
+    (``_end_iterations``).
     on_step(load_factor, u, solved) is called after each converged step (u (n_dofs,), solved
     the ``SolverResult``); timer: a stopwatch the problems share (the time of their parts);
     first_guess(load_factor): a start for the first step, (n_dofs,), or None, such as the
@@ -607,7 +617,7 @@ def follow_load_path(
         checks = (solver, problem) if stability else None
         iterations = None
         if previous is None and not trusted and trial_factor >= 1.0 - _END:
-            iterations = _end_iterations(solver, u)  # the whole path in one step
+            iterations = _end_iterations(solver, u, problem.free)  # the whole path in one step
         try:
             solved = solve_step(
                 problem,
