@@ -123,14 +123,15 @@ def write_problem(n: int, directory: Path) -> Path:
     material, (load,) = case["material"], case["load"]
     if material["model"] != "svk" or load["kind"] != "pressure":
         raise ValueError(f"{CASE} is no longer an St Venant-Kirchhoff sheet under one pressure")
-    model = read_case(CASE, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}})
+    wrinkle_case = read_case(CASE, overrides={"mesh": {"rectangle": {"nx": n, "ny": n}}})
+    model = wrinkle_case.model
     path = directory / f"airbag_{n}.npz"
     np.savez(
         path,
         nodes=model.mesh.nodes,
         triangles=model.mesh.triangles,
         held=model.constrained.reshape(-1, 3),
-        centre=model.probes["centre"],
+        centre=wrinkle_case.probes["centre"],
         young_modulus=material["E"],
         poisson_ratio=material["nu"],
         thickness=material["thickness"],
