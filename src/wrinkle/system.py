@@ -1075,13 +1075,7 @@ class StepProblem:
         # to them unless they are kept or the lift needs them, and then, if nothing else adds
         # to them, they need no zeroing
         everything = keep_constrained or lift is not None
-        free_rows_only = (
-            fused
-            and not everything
-            and system.bending is None
-            and system.cables is None
-            and not system.has_follower_edges
-        )
+        free_rows_only = fused and not everything and not self._others_add_stiffness()
         with timer.part(ASSEMBLY):
             if fused and not deferred:
                 system.assemble_stiffness(
@@ -1151,6 +1145,12 @@ class StepProblem:
             later,
         )
 
+    def _others_add_stiffness(self) -> bool:
+        """Whether parts besides the membrane elements (bending, cables, follower edge loads)
+        add to the tangent, on its constrained rows and columns too."""
+        system = self.system
+        return system.bending is not None or system.cables is not None or system.has_follower_edges
+
     def _zero_constrained(self, data: np.ndarray, written: bool = True) -> None:
         """The constrained rows and columns of the tangent's data zeroed, their diagonal one.
         written: whether anything was added to those entries; if not (data began as zeros and
@@ -1174,5 +1174,5 @@ class StepProblem:
             data = np.zeros(pattern.nnz)
             system.assemble_stiffness(data, result, x, self.pressures, self._kept_dofs(False))
             system.add_bending_stiffness(data)
-            self._zero_constrained(data, written=system.bending is not None)
+            self._zero_constrained(data, written=self._others_add_stiffness())
             return pattern.matrix(data)
