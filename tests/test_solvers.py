@@ -355,3 +355,41 @@ def test_newton_backtracks_along_a_rejected_step():
     # the whole solve converges to Pi's minimum, u = f / sqrt(1 - f^2)
     result = solver.solve(problem, u)
     np.testing.assert_allclose(result.u, problem.f / np.sqrt(1 - problem.f**2), rtol=1e-9)
+
+
+class _DoubleWell:
+    """Pi(u) = offset + sum((u^2 - 1)^2 / 4) - f.u: two wells per component, the hilltop
+    between them near u = -f, where the tangent 3 u^2 - 1 is negative."""
+
+    def __init__(self, f, offset):
+        self.f = np.asarray(f, dtype=float)
+        self.offset = offset
+        self.free = np.ones(self.f.size, dtype=bool)
+
+    def evaluate(self, u, stiffness=True):
+        import scipy.sparse as sp
+
+        from wrinkle.solvers import Evaluation
+
+        K = sp.diags(3.0 * u**2 - 1.0).tocsr() if stiffness else None
+        energy = self.offset + float(np.sum((u**2 - 1.0) ** 2) / 4.0 - self.f @ u)
+        return Evaluation(self.f - (u**3 - u), energy, 1.0, (u.size, 0, 0), K)
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e12])
+def test_newton_goes_down_from_a_hilltop_even_where_energy_changes_are_round_off(offset):
+    """From near the hilltop of a double well, where Newton's step climbs to it (the energy
+    model predicts an increase), Newton goes down into a well: a minimum of Pi, u^3 - u = f
+    with 3 u^2 - 1 > 0. With offset 1e12 every change of Pi is below its round-off and the
+    decrease is measured from the residuals (the trapezoidal rule). Before 6 December 2026
+    both ended on the hilltop, a maximum of Pi (the merit |r|^2 took over there)."""
+    problem = _DoubleWell([0.01, -0.02], offset)
+    solver = make_solver("newton", tolerance=1e-10)
+    result = solver.solve(problem, np.array([0.1, 0.05]))
+    u = result.u
+    np.testing.assert_allclose(u**3 - u, problem.f, atol=1e-10)
+    assert np.all(3.0 * u**2 - 1.0 > 1.0)  # in a well, not on the hilltop (-1 there)
+    # and the roots are the wells' bottoms, to the tolerance
+    wells = [np.roots([1.0, 0.0, -1.0, -f]).real for f in problem.f]
+    for value, roots in zip(u, wells, strict=True):
+        assert np.min(np.abs(roots - value)) < 1e-9

@@ -217,16 +217,20 @@ def try_evaluate(
     problem: Problem, u: np.ndarray, stiffness: bool = True, **options
 ) -> Evaluation | None:
     """Evaluate a trial point; None if it is not admissible (the solver then shortens the step).
-    ``options`` go to ``problem.evaluate``."""
+    ``options`` go to ``problem.evaluate``. A trial point far out (a step past a limit point)
+    may overflow: NumPy's warnings are silenced meanwhile, and a point whose forces are not
+    finite is refused."""
     try:
-        evaluation = problem.evaluate(u, stiffness=stiffness, **options)
+        with np.errstate(all="ignore"):
+            evaluation = problem.evaluate(u, stiffness=stiffness, **options)
+            finite = bool(np.all(np.isfinite(evaluation.residual)))
+            # forces so large that their norm overflows
+            finite = finite and math.isfinite(evaluation.residual_norm)
     except (EvaluationFailure, ArithmeticError, ValueError, RuntimeError) as error:
         logger.debug("trial point rejected: %s", error)
         return None
-    if not np.all(np.isfinite(evaluation.residual)):
+    if not (finite and math.isfinite(evaluation.force_scale)):
         return None
-    if not (math.isfinite(evaluation.residual_norm) and math.isfinite(evaluation.force_scale)):
-        return None  # forces so large that their norm overflows
     return evaluation
 
 

@@ -3,10 +3,18 @@
 Each iteration solves (K + theta M) du = f - f* (docs/method.md section 7) with a sparse direct
 solver (``wrinkle.solvers.linear``) and accepts the step by the gain ratio of the potential
 energy Pi(u) = sum_e A0 w_relaxed - f.u (- p V for pressure) against its quadratic model,
-rho = [Pi(u) - Pi(u + du)] / [r.du - du.K.du / 2]. Where the decrease is at the level of
-round-off in Pi (close to convergence), or the loads have no potential, the merit is
-|f - f*|^2 with its Gauss-Newton model instead. Near the solution theta falls to a floor of
-1e-14 and the iteration is Newton's, converging quadratically with the consistent tangent.
+rho = [Pi(u) - Pi(u + du)] / [r.du - du.K.du / 2]. Where the predicted decrease is at the
+level of round-off in Pi (close to convergence), the actual decrease is measured from the
+residuals r = f - f* at both ends by the trapezoidal rule,
+Pi(u) - Pi(u + du) = int_0^1 r(u + s du).du ds ~ [r(u) + r(u + du)].du / 2, exact for a
+quadratic Pi and as precise as the forces, not the total energy. Only where the loads have
+no potential is the merit |f - f*|^2, with its Gauss-Newton model. (Before 6 December 2026
+that merit took over wherever the energy model predicted less than round-off, a rise
+included; it accepts steps towards any equilibrium, a hilltop or saddle of Pi too, and on
+an indefinite tangent it predicts no decrease for a strongly regularised step, so that
+near convergence a solve could be refused every step.) Near the solution theta falls to a
+floor of 1e-14 and the iteration is Newton's, converging quadratically with the consistent
+tangent.
 
 The metric M measures the step. With the problem's ``Evaluation.metric`` L (the model gives
 the stiffness of a unit tension, a Laplacian on each displacement component, i.e. the H1
@@ -100,9 +108,10 @@ class RegularisedNewton(RegularisedSolver):
         self, ev: Evaluation, theta: float, free: np.ndarray
     ) -> tuple[np.ndarray | None, float]:
         """Step and the decrease predicted for the merit in use: the potential energy by its
-        quadratic model, or (no potential, or a decrease at round-off) |r|^2 by its
-        Gauss-Newton model. From a flat membrane under pressure only the energy model sees the
-        benefit of moving out of plane (the tangent has no out-of-plane stiffness there)."""
+        quadratic model r.du - du.K.du / 2 (not positive: the step is refused and theta
+        grows), or (no potential) |r|^2 by its Gauss-Newton model. From a flat membrane
+        under pressure only the energy model sees the benefit of moving out of plane (the
+        tangent has no out-of-plane stiffness there)."""
         solve = self.factorise(self.regularised(ev, theta, free), ev.symmetric, free)
         if solve is None:
             return None, 0.0
@@ -113,15 +122,27 @@ class RegularisedNewton(RegularisedSolver):
         K_step = ev.tangent @ step
         # the energy model along the step, r.du and du.K.du, kept for ``backtrack``
         self._slope, self._curvature = float(r @ step), float(step @ K_step)
+        self._step = step
         energy_model = self._slope - 0.5 * self._curvature
-        self._use_energy = np.isfinite(ev.energy) and energy_model > _ROUND_OFF * abs(ev.energy)
+        self._use_energy = bool(np.isfinite(ev.energy))
         if self._use_energy:
             return step, energy_model
         return step, float(r @ r - np.sum((r - K_step) ** 2))
 
+    def _decrease(
+        self, ev: Evaluation, trial: Evaluation, predicted: float, fraction: float = 1.0
+    ) -> float:
+        """Pi(u) - Pi(u + fraction du) (J): from the energies; where the decrease predicted
+        is at round-off in Pi, int_0^1 r(u + s fraction du).(fraction du) ds by the
+        trapezoidal rule from the residuals at both ends (exact for a quadratic Pi, and as
+        precise as the forces)."""
+        if predicted > _ROUND_OFF * abs(ev.energy):
+            return ev.energy - trial.energy
+        return 0.5 * fraction * float((ev.residual + trial.residual) @ self._step)
+
     def gain_ratio(self, ev: Evaluation, trial: Evaluation, predicted: float) -> float:
         if self._use_energy:
-            actual = ev.energy - trial.energy
+            actual = self._decrease(ev, trial, predicted)
             return actual / predicted if np.isfinite(actual) else -np.inf
         return (ev.residual_norm**2 - trial.residual_norm**2) / predicted
 
@@ -144,7 +165,10 @@ class RegularisedNewton(RegularisedSolver):
                 trial = try_evaluate(problem, shorter, **deferring(problem))
             else:
                 trial = try_evaluate(problem, shorter, stiffness=False)
-            if trial is not None and ev.energy - trial.energy >= _SUFFICIENT * predicted:
+            if (
+                trial is not None
+                and self._decrease(ev, trial, predicted, fraction) >= _SUFFICIENT * predicted
+            ):
                 if trial.stiffness is not None or trial.later is not None:
                     return shorter, trial.with_stiffness()
                 evaluation = try_evaluate(problem, shorter)
