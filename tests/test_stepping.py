@@ -365,3 +365,59 @@ def test_a_path_resumed_from_any_level_goes_on_as_the_uninterrupted_one():
         resume = Resume(factor, np.zeros(3), (levels[k - 1][0], np.zeros(3)), state)
         follow_load_path(FakeLevels(), resumed, controller, resume=resume)
         assert resumed.trials == full[tried:], factor
+
+
+class CreepsDown(NeedsIterations):
+    """``NeedsIterations`` whose steps down across the load factor ``fold`` need ``creep``
+    iterations (the folds rearranging as the pressure falls), from the last level it
+    converged at."""
+
+    def __init__(self, needed, creep, fold, default=True):
+        super().__init__(needed, default)
+        self.creep, self.fold, self.last = creep, fold, None
+
+    def solve(self, problem, start, at_start=None, iterations=None):
+        factor = problem.load_factor
+        if self.last is None or not self.last > self.fold >= factor:
+            result = super().solve(problem, start, at_start, iterations)
+        else:
+            limit = self.max_iterations if iterations is None else iterations
+            self.calls.append((round(factor, 12), limit))
+            if self.creep > limit:
+                raise ConvergenceError(f"not converged in {limit} iterations", [])
+            result = SolverResult(np.full(start.size, factor), self.creep, [], at_start)
+        self.last = factor
+        return result
+
+
+def test_a_step_down_that_fails_is_tried_again_with_the_creep_budget():
+    """Worked by hand, rule 8, 4 steps, a step down across load factor 0.6 needing 250
+    iterations: the first step (100) fails from rest, the end is solved with 400 (rule 7),
+    0.75 with 100 (5 iterations); 0.5 fails with 100 and is tried again at the cut
+    increment, 0.625, with 400 (5 iterations: the increment grows back to 0.25); 0.375
+    then crosses 0.6, fails with 100, and its retry 0.5 converges with 400 (250); 0.375
+    and 0.125 follow with 100. Needing 500 to cross, 0.5's retry with 400 fails too, and
+    0.5625 gets 100 again: one retry with the budget a level. A user's limit holds
+    everywhere (the end from rest then fails, and the first step is cut back)."""
+    solver = CreepsDown(250, creep=250, fold=0.6)
+    follow_load_path(FakeLevels(), solver, SolverSettings(steps=4).controller())
+    assert solver.calls == [
+        (0.25, 100),
+        (1.0, 400),
+        (0.75, 100),
+        (0.5, 100),
+        (0.625, 400),
+        (0.375, 100),
+        (0.5, 400),
+        (0.375, 100),
+        (0.125, 100),
+    ]
+    settings = SolverSettings(steps=4, min_step=0.05)
+    solver = CreepsDown(250, creep=500, fold=0.6)
+    with pytest.raises(ConvergenceError, match="not converged in 100"):
+        follow_load_path(FakeLevels(), solver, settings.controller())
+    assert solver.calls[3:8] == [(0.5, 100), (0.625, 400), (0.375, 100), (0.5, 400), (0.5625, 100)]
+    solver = CreepsDown(250, creep=250, fold=0.6, default=False)
+    with pytest.raises(ConvergenceError, match="not converged in 100"):
+        follow_load_path(FakeLevels(), solver, settings.controller())
+    assert solver.calls == [(0.25, 100), (1.0, 100), (0.125, 100), (0.0625, 100)]

@@ -71,7 +71,8 @@ END_ROUNDS = 4
 # membrane's folds creep about a third of an element per iteration, so the iterations from
 # the flat sheet grow like 1/h, the square root of the mesh's size (up to 9.2 sqrt(n) measured
 # from 800 to 151,000 free unknowns, 24 % apart in two runs of one case;
-# docs/notes/2026-12-hard-cases.md, section 4f)
+# docs/notes/2026-12-hard-cases.md, section 4f). Both budgets serve as well the first try
+# again after a failed step down a ramp (``descend``), whose folds creep whatever its size.
 END_PER_ROOT = 12.0
 
 
@@ -242,16 +243,24 @@ def tangent_prediction(
     return None if step is None else u + lift + step
 
 
-def _end_iterations(solver: RegularisedSolver, u: np.ndarray, free: np.ndarray) -> int | None:
-    """The iteration limit of a solve of the end of the path from u (n_dofs,), free (n_dofs,)
-    bool its free components: the larger of END_ROUNDS times the solver's and END_PER_ROOT
-    sqrt(n), n the free components, where u is the reference state and the limit is the
-    method's default; None (the solver's own) otherwise, a limit the user set included."""
-    if np.any(u) or not getattr(solver, "limit_is_default", False):
+def _creep_iterations(solver: RegularisedSolver, free: np.ndarray) -> int | None:
+    """The iteration limit of a solve that creeps (rules 7 and 8 of the step controller):
+    the larger of END_ROUNDS times the solver's and END_PER_ROOT sqrt(n), n the free
+    components (free: (n_dofs,) bool), where the limit is the method's default; None (the
+    solver's own) otherwise, a limit the user set included."""
+    if not getattr(solver, "limit_is_default", False):
         return None
     by_size = math.ceil(END_PER_ROOT * math.sqrt(np.count_nonzero(free)))
-    limit = max(END_ROUNDS * solver.max_iterations, by_size)
-    logger.info("the end of the path from the reference state: up to %d iterations", limit)
+    return max(END_ROUNDS * solver.max_iterations, by_size)
+
+
+def _end_iterations(solver: RegularisedSolver, u: np.ndarray, free: np.ndarray) -> int | None:
+    """The iteration limit of a solve of the end of the path from u (n_dofs,), free (n_dofs,)
+    bool its free components: ``_creep_iterations`` where u is the reference state (rule 7);
+    None (the solver's own) otherwise."""
+    limit = None if np.any(u) else _creep_iterations(solver, free)
+    if limit is not None:
+        logger.info("the end of the path from the reference state: up to %d iterations", limit)
     return limit
 
 
@@ -325,25 +334,36 @@ def descend(
     extrapolation of the two levels above it, as ``follow_load_path`` does upwards. The
     levels are those an upward path would aim at: the top's load factor minus multiples of
     the increment, down to the smallest above 0. Returns them in increasing load factor,
-    ``top`` last, or None if a step fails at the smallest increment. Valid for elastic
-    (path-independent) problems, which every material of wrinkle is."""
+    ``top`` last, or None if a step fails at the smallest increment. The first try again
+    after a failure below a level may take ``_creep_iterations`` (rule 8 of the step
+    controller). Valid for elastic (path-independent) problems, which every material of
+    wrinkle is."""
     factor, u, _ = top
     levels = [top]
     above: tuple[float, np.ndarray] | None = None
     increment = _Increments(controller)
+    iterations: int | None = None  # the solver's own limit until a step down fails
+    budgeted = False  # whether a try at this level had ``_creep_iterations``
     while factor - increment.value > _END:
         trial_factor = factor - increment.value
         problem = _problem_at(system, trial_factor, timer)
         predicted = extrapolate(above, factor, u, trial_factor)
         try:
-            solved = solve_step(problem, u, solver, predicted=predicted)
+            solved = solve_step(problem, u, solver, predicted=predicted, iterations=iterations)
         except ConvergenceError:
             if not increment.failed():
                 return None
+            # rule 8: tried again, at the cut increment, with the creep budget; once a level
+            iterations = None if budgeted else _creep_iterations(solver, problem.free)
+            budgeted = True
             logger.info(
-                "step down to %.6g failed; increment cut to %.4g", trial_factor, increment.value
+                "step down to %.6g failed; increment cut to %.4g%s",
+                trial_factor,
+                increment.value,
+                "" if iterations is None else f", up to {iterations} iterations",
             )
             continue
+        iterations, budgeted = None, False
         above = (factor, u)
         factor, u = trial_factor, solved.u
         logger.info(
@@ -572,7 +592,8 @@ def follow_load_path(
     failed step is. A solve of the end of the path from the reference state (this one, or
     the first step where it is the whole path) may take END_ROUNDS times the method's default
     iterations, or END_PER_ROOT times the square root of the free unknowns where more
-    (``_end_iterations``).
+    (``_end_iterations``); so may the first try again after a failed step downwards
+    (``descend``).
     on_step(load_factor, u, solved) is called after each converged step (u (n_dofs,), solved
     the ``SolverResult``); timer: a stopwatch the problems share (the time of their parts);
     first_guess(load_factor): a start for the first step, (n_dofs,), or None, such as the
