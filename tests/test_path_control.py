@@ -20,7 +20,8 @@ from verification.references.sphere import LIMIT_STRETCH, InflatedSphere, effect
 from wrinkle.case import read_case
 from wrinkle.cli import main
 from wrinkle.gas import Gas
-from wrinkle.solvers import ConvergenceError
+from wrinkle.solvers import ConvergenceError, control
+from wrinkle.solvers.settings import SolverSettings
 
 ROOT = Path(__file__).resolve().parents[1]
 SPHERE = ROOT / "verification" / "cases" / "sphere.toml"
@@ -186,6 +187,69 @@ def test_a_flat_airbag_inflated_by_an_amount_of_gas_and_by_its_volume(tmp_path):
     by_volume = controlled.solve().final
     assert by_volume.enclosed_volume == pytest.approx(volume, rel=1e-7)
     assert by_volume.pressure == pytest.approx(5000.0, rel=1e-2)
+
+
+class InflatedFromFlat:
+    """A volume or gas path whose bordered solves (``control.solve_bordered``, replaced by
+    ``solve``) converge in 5 iterations below path parameter 0.9 (the gas does not yet
+    fill the sheet: a slack state) and need ``needed`` from any start above it, as the
+    inflation that forms the folds does. ``default``: the solver's limit is the method's
+    own (100). Records (path parameter, limit) of each solve."""
+
+    n_dofs = 3
+    tolerance, max_iterations, method = 1e-8, 100, "newton"
+
+    def __init__(self, needed, default=True):
+        self.needed, self.limit_is_default, self.calls = needed, default, []
+
+    def at(self, t, pressure_factor=0.0):
+        return type("Problem", (), {"free": np.ones(self.n_dofs, dtype=bool)})()
+
+    def solve(self, family, constraint, u0, mu0, solver, share, merit, iterations=None):
+        limit = self.max_iterations if iterations is None else iterations
+        self.calls.append((round(family.t, 12), limit))
+        needed = 5 if family.t < 0.9 else self.needed
+        if needed > limit:
+            raise ConvergenceError(f"not converged in {limit} iterations", [])
+        solved = type("Solved", (), {})()
+        solved.u, solved.mu, solved.iterations = np.full(self.n_dofs, family.t), 0.0, needed
+        return solved
+
+    def follow(self, monkeypatch, **settings):
+        monkeypatch.setattr(control, "solve_bordered", self.solve)
+        admits_all = type("Constraint", (), {"admits": lambda self, mu: True})()
+        controller = SolverSettings(**settings).controller()
+        control.follow_volume_path(
+            self, self, controller, lambda t: (admits_all, None), lambda *step: None
+        )
+
+
+def test_a_volume_path_gives_the_inflation_the_creep_budget(monkeypatch):
+    """Worked by hand, an inflation needing 250 iterations (rules 7 and 9 of the step
+    controller): in one step, from the flat sheet, the end of the path is solved once with
+    4 x 100; in 5 steps the slack levels 0.2 to 0.8 take 5 iterations each, and the step to
+    1, which fails with 100, is tried again at once with 400 instead of being cut back into
+    the regime where the gas starts to press. Once a level: needing 500, the retry fails
+    too and the step is cut back with 100 a solve. A limit set by the user holds everywhere:
+    neither the solve from rest nor the failed step is given more."""
+    path = InflatedFromFlat(250)
+    path.follow(monkeypatch, steps=1)
+    assert path.calls == [(1.0, 400)]
+    path = InflatedFromFlat(250)
+    path.follow(monkeypatch, steps=5)
+    assert path.calls == [(0.2, 100), (0.4, 100), (0.6, 100), (0.8, 100), (1.0, 100), (1.0, 400)]
+    path = InflatedFromFlat(500)
+    with pytest.raises(ConvergenceError, match="not converged in 100"):
+        path.follow(monkeypatch, steps=5, min_step=0.1)
+    assert path.calls[4:] == [(1.0, 100), (1.0, 400), (0.9, 100)]
+    path = InflatedFromFlat(250, default=False)
+    with pytest.raises(ConvergenceError, match="not converged in 100"):
+        path.follow(monkeypatch, steps=1, min_step=1.0)
+    assert path.calls == [(1.0, 100)]
+    path = InflatedFromFlat(250, default=False)
+    with pytest.raises(ConvergenceError, match="not converged in 100"):
+        path.follow(monkeypatch, steps=5, min_step=0.2)
+    assert path.calls[4:] == [(1.0, 100)]
 
 
 def test_a_gas_sealed_in_no_volume_is_refused():

@@ -194,17 +194,20 @@ def solve_bordered(
     solver: RegularisedNewton,
     timer_owner: Callable[[SteppedProblem], None] | None = None,
     merit: Merit | None = None,
+    iterations: int | None = None,
 ) -> BorderedResult:
     """Solve R(u, mu) = 0, c(u, mu) = 0 from (u0, mu0) (module docstring) with the linear
     back-end, tolerance and iteration limit of ``solver``. timer_owner(problem) is called on
     each problem made (to share a stopwatch). merit: how steps are judged (default
     ``ResidualMerit``; a merit with a potential, such as the Lagrangian of volume
-    control, finds the inflated shape from a flat sheet where the residual cannot). Raises
+    control, finds the inflated shape from a flat sheet where the residual cannot).
+    iterations: the most iterations of this solve (None: ``solver.max_iterations``). Raises
     ConvergenceError if it fails, InadmissibleState if it balances in a state that is not
     physical. OpenBLAS runs on ``solver.blas_threads`` threads meanwhile, and freed memory
     stays with the process (``wrinkle.memory``)."""
+    limit = solver.max_iterations if iterations is None else int(iterations)
     with blas_threads(solver.blas_threads), kept_memory():
-        return _solve_bordered(family, constraint, u0, mu0, solver, timer_owner, merit)
+        return _solve_bordered(family, constraint, u0, mu0, solver, timer_owner, merit, limit)
 
 
 def _solve_bordered(
@@ -215,8 +218,9 @@ def _solve_bordered(
     solver: RegularisedNewton,
     timer_owner: Callable[[SteppedProblem], None] | None,
     merit: Merit | None,
+    limit: int,
 ) -> BorderedResult:
-    """``solve_bordered``."""
+    """``solve_bordered`` in at most ``limit`` iterations."""
 
     def problem_at(mu: float) -> SteppedProblem:
         problem = family.at(mu)
@@ -241,7 +245,7 @@ def _solve_bordered(
     theta = solver.initial_theta(ev.tangent, free)
     fallback = ResidualMerit(constraint.scale)
     merit = fallback if merit is None else merit
-    for iteration in range(solver.max_iterations + 1):
+    for iteration in range(limit + 1):
         log_iteration(method, iteration, ev, theta)
         if is_converged(ev, solver.tolerance) and abs(lin.value) <= (
             solver.tolerance * constraint.scale
@@ -254,7 +258,7 @@ def _solve_bordered(
             return BorderedResult(
                 u, iteration, history, ev, mu=mu, constraint_history=constraint_history
             )
-        if iteration == solver.max_iterations:
+        if iteration == limit:
             break
         q = family.derivative(u)
         g = np.zeros_like(u) if lin.gradient is None else lin.gradient
@@ -306,7 +310,7 @@ def _solve_bordered(
         history.append(ev.residual_norm)
         constraint_history.append(lin.value)
     raise ConvergenceError(
-        f"{method}: not converged in {solver.max_iterations} iterations (residual "
+        f"{method}: not converged in {limit} iterations (residual "
         f"{ev.residual_norm:.3e}, needed {solver.tolerance * ev.force_scale:.3e}; constraint "
         f"{lin.value:.3e}, needed {solver.tolerance * constraint.scale:.3e})",
         history,

@@ -13,7 +13,12 @@ with V_target independent of mu, judged by the augmented Lagrangian of the energ
 law's volume at the gauge pressure mu, V_target = V_gas(t, mu) (the load factor t pumps the
 gas in), judged by the total energy with the gas's potential (``GasEnergy``). Either way,
 the other loads and the prescribed motions grow with t, and a step that fails is cut back
-as under load control (``StepController``).
+as under load control (``StepController``). As the end of a load-controlled path, the step
+to t = 1 from the reference state may take the creep budget (``end_iterations``, rule 7 of
+the step controller, docs/solvers.md), and a step that fails is first tried again at the
+same increment with that budget, once a level (rule 9): until the gas fills the sheet at
+ambient pressure the levels are slack, and the step into the pressurised part creeps as a
+solve from the flat sheet does, while a cut-back lands in the regime of a small pressure.
 
 A stop at a probe's displacement (``[solver] stop``) ends any path at the step that reaches
 it: that step is solved again from the interpolation of the two states around the crossing,
@@ -46,6 +51,8 @@ from wrinkle.solvers.stepping import (
     OnStep,
     StepController,
     SteppedProblem,
+    creep_iterations,
+    end_iterations,
     extrapolate,
     follow_load_path,
 )
@@ -309,14 +316,16 @@ def follow_volume_path(
     ``constraint_at(t)`` (``VolumeLagrangian``, ``GasEnergy``; None: the residual's), from the
     extrapolation of the last two converged states.
     on_step(t, u, solved) after each (solved: a ``BorderedResult`` whose ``mu`` is the
-    pressure factor). stop: end where a probe's displacement reaches it. Returns how the path
-    ended; raises ConvergenceError (``reached`` set) when a step fails at the smallest
-    increment."""
+    pressure factor). stop: end where a probe's displacement reaches it. The iteration
+    limits of rules 7 and 9 (module docstring). Returns how the path ended; raises
+    ConvergenceError (``reached`` set) when a step fails at the smallest increment."""
     u = np.zeros(system.n_dofs) if u0 is None else np.array(u0, dtype=float)
     mu, t = float(mu0), 0.0
     previous: tuple[float, np.ndarray, float] | None = None
     increment = controller.first()
     share = _shared(timer)
+    retry = False  # the next try is the step that failed, with the creep budget (rule 9)
+    budgeted = False  # whether a try from this level had the creep budget
     while t < 1.0 - _END:
         trial_t = t + increment
         trial_t = 1.0 if trial_t >= 1.0 - _END else trial_t
@@ -329,9 +338,25 @@ def follow_volume_path(
         if not constraint.admits(start_mu):
             start_mu = mu
         family = PressureFamily(system, trial_t)
+        iterations = None
+        if trial_t == 1.0 and not np.any(start_u):  # rule 7: the whole path from rest
+            iterations = end_iterations(solver, start_u, family.at(start_mu).free)
+        elif retry:  # rule 9: the step that failed, again with the creep budget
+            iterations = creep_iterations(solver, family.at(start_mu).free)
+            logger.info(
+                "step to %.6g failed; tried again with up to %s iterations",
+                trial_t,
+                iterations,
+            )
+        budgeted, retry = budgeted or iterations is not None, False
         try:
-            solved = solve_bordered(family, constraint, start_u, start_mu, solver, share, merit)
+            solved = solve_bordered(
+                family, constraint, start_u, start_mu, solver, share, merit, iterations
+            )
         except ConvergenceError as error:
+            if not budgeted and getattr(solver, "limit_is_default", False):
+                retry = True
+                continue
             smaller = controller.after_failure(increment)
             if smaller is None:
                 failure = ConvergenceError(
@@ -353,6 +378,7 @@ def follow_volume_path(
             )
         previous = (t, u, mu)
         t, u, mu = trial_t, solved.u, solved.mu
+        budgeted = False
         logger.info(
             "path parameter %.6g converged in %d iterations (pressure factor %.6g)",
             t,

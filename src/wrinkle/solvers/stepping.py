@@ -44,7 +44,9 @@ __all__ = [
     "Resume",
     "StepController",
     "SteppedProblem",
+    "creep_iterations",
     "descend",
+    "end_iterations",
     "extrapolate",
     "follow_load_path",
     "solve_step",
@@ -243,8 +245,8 @@ def tangent_prediction(
     return None if step is None else u + lift + step
 
 
-def _creep_iterations(solver: RegularisedSolver, free: np.ndarray) -> int | None:
-    """The iteration limit of a solve that creeps (rules 7 and 8 of the step controller):
+def creep_iterations(solver: RegularisedSolver, free: np.ndarray) -> int | None:
+    """The iteration limit of a solve that creeps (rules 7, 8 and 9 of the step controller):
     the larger of END_ROUNDS times the solver's and END_PER_ROOT sqrt(n), n the free
     components (free: (n_dofs,) bool), where the limit is the method's default; None (the
     solver's own) otherwise, a limit the user set included."""
@@ -254,11 +256,11 @@ def _creep_iterations(solver: RegularisedSolver, free: np.ndarray) -> int | None
     return max(END_ROUNDS * solver.max_iterations, by_size)
 
 
-def _end_iterations(solver: RegularisedSolver, u: np.ndarray, free: np.ndarray) -> int | None:
+def end_iterations(solver: RegularisedSolver, u: np.ndarray, free: np.ndarray) -> int | None:
     """The iteration limit of a solve of the end of the path from u (n_dofs,), free (n_dofs,)
-    bool its free components: ``_creep_iterations`` where u is the reference state (rule 7);
+    bool its free components: ``creep_iterations`` where u is the reference state (rule 7);
     None (the solver's own) otherwise."""
-    limit = None if np.any(u) else _creep_iterations(solver, free)
+    limit = None if np.any(u) else creep_iterations(solver, free)
     if limit is not None:
         logger.info("the end of the path from the reference state: up to %d iterations", limit)
     return limit
@@ -335,7 +337,7 @@ def descend(
     levels are those an upward path would aim at: the top's load factor minus multiples of
     the increment, down to the smallest above 0. Returns them in increasing load factor,
     ``top`` last, or None if a step fails at the smallest increment. The first try again
-    after a failure below a level may take ``_creep_iterations`` (rule 8 of the step
+    after a failure below a level may take ``creep_iterations`` (rule 8 of the step
     controller). Valid for elastic (path-independent) problems, which every material of
     wrinkle is."""
     factor, u, _ = top
@@ -343,7 +345,7 @@ def descend(
     above: tuple[float, np.ndarray] | None = None
     increment = _Increments(controller)
     iterations: int | None = None  # the solver's own limit until a step down fails
-    budgeted = False  # whether a try at this level had ``_creep_iterations``
+    budgeted = False  # whether a try at this level had ``creep_iterations``
     while factor - increment.value > _END:
         trial_factor = factor - increment.value
         problem = _problem_at(system, trial_factor, timer)
@@ -354,7 +356,7 @@ def descend(
             if not increment.failed():
                 return None
             # rule 8: tried again, at the cut increment, with the creep budget; once a level
-            iterations = None if budgeted else _creep_iterations(solver, problem.free)
+            iterations = None if budgeted else creep_iterations(solver, problem.free)
             budgeted = True
             logger.info(
                 "step down to %.6g failed; increment cut to %.4g%s",
@@ -392,7 +394,7 @@ def _from_the_end(
     problem = _problem_at(system, 1.0, timer)
     predicted = None if first_guess is None else first_guess(1.0)
     stop = None if predicted is None or first_stop is None else first_stop(1.0)
-    iterations = None if predicted is not None else _end_iterations(solver, u, problem.free)
+    iterations = None if predicted is not None else end_iterations(solver, u, problem.free)
     try:
         solved = solve_step(
             problem,
@@ -592,7 +594,7 @@ def follow_load_path(
     failed step is. A solve of the end of the path from the reference state (this one, or
     the first step where it is the whole path) may take END_ROUNDS times the method's default
     iterations, or END_PER_ROOT times the square root of the free unknowns where more
-    (``_end_iterations``); so may the first try again after a failed step downwards
+    (``end_iterations``); so may the first try again after a failed step downwards
     (``descend``).
     on_step(load_factor, u, solved) is called after each converged step (u (n_dofs,), solved
     the ``SolverResult``); timer: a stopwatch the problems share (the time of their parts);
@@ -638,7 +640,7 @@ def follow_load_path(
         checks = (solver, problem) if stability else None
         iterations = None
         if previous is None and not trusted and trial_factor >= 1.0 - _END:
-            iterations = _end_iterations(solver, u, problem.free)  # the whole path in one step
+            iterations = end_iterations(solver, u, problem.free)  # the whole path in one step
         try:
             solved = solve_step(
                 problem,
