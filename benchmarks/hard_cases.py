@@ -15,7 +15,10 @@ The cases (case files in benchmarks/hard_cases/ and examples/):
 - the pulled-node fan (pulled_node.toml), the same node pushed (the load reversed: the sheet
   round the node goes slack), and pulled then pushed in one run (two analysis steps);
 - a fully slack start: the shear-stretch square of examples/shear_stretch.toml solved from a
-  state shrunk 10 % about its centre (every element slack), against the flat start.
+  state shrunk 10 % about its centre (every element slack), against the flat start;
+- the same airbag inflated by an amount of gas (examples/airbag_gas.toml: the gas that is at
+  5 kPa in the pressure's solution) and by volume control to that volume (0.015615 m^3), in
+  1 and 5 steps, on structured meshes (``--gas``) and on the gmsh mesh.
 
 For each: elements, settings, converged or not, converged load levels, Newton iterations of
 the converged levels, factorisations of the whole run (failed steps included), wall time and
@@ -28,6 +31,7 @@ writes it as CSV.
     python benchmarks/hard_cases.py --rectangle 40 80 160 --fan 8 32 64
     python benchmarks/hard_cases.py --compare regrow_after
     python benchmarks/hard_cases.py --compare end_rounds --only "10 Pa" --small-pressure 16 32
+    python benchmarks/hard_cases.py --compare end_rounds --only gas volume --gas 32 64
 """
 
 from __future__ import annotations
@@ -53,6 +57,8 @@ GMSH_AIRBAG = HERE / "airbag_gmsh.toml"
 RECTANGLE = HERE / "sheared_rectangle.toml"
 FAN = HERE / "pulled_node.toml"
 SQUARE = ROOT / "examples" / "shear_stretch.toml"
+GAS = {"kind": "gas", "amount": 1639.6, "ambient": 1.0e5, "gamma": 1.0}  # airbag_gas.toml
+VOLUME = 0.015615  # m^3, the airbag's at 5 kPa
 FIELDS = [
     "case",
     "elements",
@@ -184,6 +190,25 @@ def cases(args: argparse.Namespace) -> list[HardCase]:
                 shrunk,
             )
         )
+    meshes = [({"mesh": {"rectangle": {"nx": n, "ny": n}}}, AIRBAG, f"{n}x{n}") for n in args.gas]
+    for mesh, path, label in [*meshes, ({}, GMSH_AIRBAG, "gmsh")]:
+        for steps in (1, 5):
+            runs.append(
+                HardCase(
+                    f"airbag {label}, gas, steps={steps}",
+                    path,
+                    {**mesh, "load": [GAS], "solver": {"steps": steps}},
+                    centre_mm,
+                )
+            )
+            runs.append(
+                HardCase(
+                    f"airbag {label}, volume, steps={steps}",
+                    path,
+                    {**mesh, "solver": {"steps": steps, "control": "volume", "volume": VOLUME}},
+                    centre_mm,
+                )
+            )
     if args.only:
         runs = [run for run in runs if any(word in run.name for word in args.only)]
     return runs
@@ -239,6 +264,7 @@ def main() -> None:
     parser.add_argument("--rectangle", type=int, nargs="+", default=[40, 80])
     parser.add_argument("--fan", type=int, nargs="+", default=[8, 32])
     parser.add_argument("--slack", type=int, nargs="+", default=[8, 32])
+    parser.add_argument("--gas", type=int, nargs="+", default=[32], metavar="N")
     parser.add_argument("--only", nargs="+", help="cases whose name contains one of these")
     parser.add_argument("--no-compare", action="store_true", help="default settings only")
     parser.add_argument(
