@@ -10,6 +10,7 @@ import wrinkle
 from wrinkle.case import read_case
 from wrinkle.materials import StVenantKirchhoff
 from wrinkle.solvers import ConvergenceError, SolverSettings, StepController, follow_load_path
+from wrinkle.solvers.arc_length import _first_step, follow_arc_length
 from wrinkle.solvers.base import Evaluation, SolverResult
 from wrinkle.solvers.stepping import _Increments
 
@@ -207,6 +208,39 @@ def test_the_end_of_the_path_from_the_reference_state_gets_four_times_the_iterat
     solver = NeedsIterations(250)
     follow_load_path(FakeLevels(), solver, SolverSettings(steps=4).controller())
     assert solver.calls == [(0.25, 100), (1.0, 400), (0.75, 100), (0.5, 100), (0.25, 100)]
+
+
+def test_an_arc_length_path_in_one_step_gives_its_first_step_the_creep_budget():
+    """Arc length with steps = 1 solves its first, load-controlled step to load factor 1
+    from rest, the whole path: as under load control it gets 4 x 100 (rule 7), and a solve
+    needing 250 converges at once instead of being cut back into a smaller load from the
+    same flat sheet. A first step below 1 keeps the method's 100."""
+    solver = Balanced(250)
+    follow_arc_length(FakeLevels(), solver, SolverSettings(steps=1).controller(), on_step, 10)
+    assert solver.calls == [(1.0, 400)]
+    solver = Balanced(250)
+    with pytest.raises(ConvergenceError, match="not converged in 100"):
+        _first_step(
+            FakeLevels(),
+            solver,
+            SolverSettings(steps=4, min_step=0.25).controller(),
+            np.zeros(3),
+            None,
+        )
+    assert solver.calls == [(0.25, 100)]
+
+
+class Balanced(NeedsIterations):
+    """``NeedsIterations`` whose solves end with an evaluation (as a real solver's do)."""
+
+    def solve(self, problem, start, at_start=None, iterations=None):
+        solved = super().solve(problem, start, at_start, iterations)
+        state = problem.evaluate(solved.u)
+        return SolverResult(solved.u, solved.iterations, [], state)
+
+
+def on_step(*step):
+    """Nothing to record (``follow_arc_length``'s on_step)."""
 
 
 def test_the_end_of_the_path_on_a_larger_mesh_gets_iterations_by_its_size():

@@ -9,11 +9,12 @@ Distances are measured in the scaled norm
 
 with U the displacement per unit load factor of the first step, so both parts weigh alike
 there. The first step is a load-controlled one (``solve_step``: from a flat sheet its
-globalisation is what finds the inflated shape), cut back while it fails or, for a membrane
-that encloses a volume, balances in an unstable state. Each later step predicts along the secant
-of the last converged increment, t = (du, dlambda) / s (its direction is kept through limit
-points, where dlambda changes sign), to the point at arc length ds, and corrects on the plane
-normal to t through that point,
+globalisation is what finds the inflated shape; as the whole path from the reference state it
+may take the creep budget of load control's rule 7), cut back while it fails or, for a
+membrane that encloses a volume, balances in an unstable state. Each later step predicts
+along the secant of the last converged increment, t = (du, dlambda) / s (its direction is
+kept through limit points, where dlambda changes sign), to the point at arc length ds, and
+corrects on the plane normal to t through that point,
 
     c(u, lambda) = t_u.(u - u_n) / U^2 + t_lambda (lambda - lambda_n) - ds = 0,
 
@@ -39,7 +40,7 @@ from wrinkle.solvers.bordered import Linearised, ProbeDisplacement, solve_border
 from wrinkle.solvers.control import LoadFamily, PathEnd, VolumeLevels, land
 from wrinkle.solvers.newton import RegularisedNewton
 from wrinkle.solvers.stability import unstable_modes
-from wrinkle.solvers.stepping import OnStep, StepController, solve_step
+from wrinkle.solvers.stepping import OnStep, StepController, end_iterations, solve_step
 from wrinkle.timing import Stopwatch
 
 __all__ = ["ArcLengthPlane", "LoadFactor", "follow_arc_length"]
@@ -275,15 +276,19 @@ def _first_step(
     """The load-controlled first step from u: its load factor and solve, cut back (by
     ``controller``) while it fails or, for a membrane that encloses a volume, balances in an
     unstable state (``wrinkle.solvers.stability``), which is on another branch than the one
-    from the reference state."""
+    from the reference state. Where it is the whole path from the reference state, it may
+    take the creep budget (``end_iterations``, rule 7 of the step controller)."""
     first = controller.first()
     enclosing = bool(getattr(system, "encloses_volume", False))
     while True:
         problem = system.at(first)
         if timer is not None:
             problem.timer = timer
+        # the whole path from the reference state: the creep budget (rule 7)
+        whole = first >= 1.0 - _END
+        iterations = end_iterations(solver, u, problem.free) if whole else None
         try:
-            solved = solve_step(problem, u, solver)
+            solved = solve_step(problem, u, solver, iterations=iterations)
             ev = solved.evaluation
             if ev.stiffness is None:
                 ev = try_evaluate(problem, solved.u) or ev
