@@ -393,3 +393,69 @@ def test_newton_goes_down_from_a_hilltop_even_where_energy_changes_are_round_off
     wells = [np.roots([1.0, 0.0, -1.0, -f]).real for f in problem.f]
     for value, roots in zip(u, wells, strict=True):
         assert np.min(np.abs(roots - value)) < 1e-9
+
+
+class _Wells:
+    """The bordered family R(u, mu) = mu f - (u^3 - u) of ``_DoubleWell`` (``solve_bordered``)."""
+
+    def __init__(self, f, offset):
+        self.f, self.offset = np.asarray(f, dtype=float), offset
+
+    def at(self, mu):
+        return _DoubleWell(mu * self.f, self.offset)
+
+    def derivative(self, u):
+        return self.f.copy()
+
+
+class _UnitFactor:
+    """c = mu - 1: the load factor held at 1."""
+
+    scale = 1.0
+
+    def admits(self, mu):
+        return True
+
+    def __call__(self, u, mu):
+        from wrinkle.solvers.bordered import Linearised
+
+        return Linearised(mu - 1.0, None, 1.0)
+
+
+class _WellEnergy:
+    """The double well's energy as a bordered solve's merit, with mu held (as ``GasEnergy``
+    judges a gas load: the energy, its slope and derivative -R.du)."""
+
+    def project(self, u, mu):
+        return mu
+
+    def value(self, ev, u, mu, c):
+        return ev.energy
+
+    def slope(self, ev, c, du, dmu, K_du):
+        return -float(ev.residual @ du)
+
+    def derivative(self, ev, lin, du, dmu):
+        return -float(ev.residual @ du)
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e12])
+def test_a_bordered_solve_goes_down_from_a_hilltop_even_where_merit_changes_are_round_off(
+    offset,
+):
+    """The bordered solver of volume control and gas loads (``wrinkle.solvers.bordered``) on
+    the double well, its merit the energy: from near the hilltop it ends in a well, also
+    where every change of the merit is below its round-off (offset 1e12) and the change is
+    measured from the forces by the trapezoidal rule. Before 6 December 2026 the residual
+    merit judged those changes, and the solve ended on the hilltop, a maximum of the energy."""
+    from wrinkle.solvers.bordered import solve_bordered
+
+    family = _Wells([0.01, -0.02], offset)
+    solver = make_solver("newton", tolerance=1e-10)
+    result = solve_bordered(
+        family, _UnitFactor(), np.array([0.1, 0.05]), 1.0, solver, merit=_WellEnergy()
+    )
+    u = result.u
+    assert result.mu == 1.0
+    np.testing.assert_allclose(u**3 - u, family.f, atol=1e-10)
+    assert np.all(3.0 * u**2 - 1.0 > 1.0)  # in a well, not on the hilltop (-1 there)

@@ -25,8 +25,15 @@ step judged, by the Newton solver's own rules (``RegularisedNewton``: theta from
 metric; the gain ratio of the merit's decrease to its quadratic model's, -slope/2 for the
 Newton step; theta grown after a poor ratio, cut after a good one); a full step that does
 not lower the merit is halved up to six times (Armijo's test, Nocedal & Wright, Numerical
-Optimization, 2006, section 3.1) before theta grows and the step is factorised again. A
-decrease at round-off is judged by the residual merit. A solve ends where the residual
+Optimization, 2006, section 3.1) before theta grows and the step is factorised again.
+Where the merit's change is at round-off in its value (close to convergence), it is measured
+from the merit's derivatives along the step at both ends by the trapezoidal rule, as the
+Newton solver measures the energy's, -alpha (d(0) + d(alpha)) / 2 for the point alpha (du,
+dmu): d from the forces and the constraint (``Merit.derivative``); only a merit without one
+(the residual's) hands the judgement to the residual merit. (Before 6 December 2026 every
+such change was judged by the residual merit, which accepts steps towards any balanced
+state: a gas-loaded double well ended on its hilltop, a maximum of the energy, and the
+8,192-element gas airbag stalled at 1.3e-7 of its force scale.) A solve ends where the residual
 passes the usual test (``is_converged``) and |c| <= tolerance times the constraint's scale,
 in an admissible state.
 """
@@ -148,8 +155,12 @@ class Merit(Protocol):
     project(u, mu): the unknown at a trial point (mu itself, or the value the constraint
     fixes for u, as a gas law does; nan: none); value(ev, u, mu, c): the merit there (inf
     where it is not defined); slope(ev, c, du, dmu, K_du): its derivative along the step
-    (du, dmu), with K_du the regularised tangent times du (it may adjust a penalty), or None
-    where the merit cannot judge the step (then the residual merit does)."""
+    (du, dmu) by the step's linear model, with K_du the regularised tangent times du (it may
+    adjust a penalty), or None where the merit cannot judge the step (then the residual
+    merit does); derivative(ev, lin, du, dmu): its derivative along (du, dmu) at any point,
+    from the point's forces and constraint (``Linearised``), or None: where the merit's
+    change is at round-off in its value, the change is measured from these (module
+    docstring)."""
 
     def project(self, u: np.ndarray, mu: float) -> float: ...
 
@@ -157,6 +168,10 @@ class Merit(Protocol):
 
     def slope(
         self, ev: Evaluation, c: float, du: np.ndarray, dmu: float, K_du: np.ndarray
+    ) -> float | None: ...
+
+    def derivative(
+        self, ev: Evaluation, lin: Linearised, du: np.ndarray, dmu: float
     ) -> float | None: ...
 
 
@@ -184,6 +199,11 @@ class ResidualMerit:
         self, ev: Evaluation, c: float, du: np.ndarray, dmu: float, K_du: np.ndarray
     ) -> float | None:
         return -2.0 * (ev.residual_norm**2 + ((self.weight or 0.0) * c) ** 2)
+
+    def derivative(
+        self, ev: Evaluation, lin: Linearised, du: np.ndarray, dmu: float
+    ) -> float | None:
+        return None  # (never at round-off: it is the residual's square)
 
 
 def solve_bordered(
@@ -274,29 +294,34 @@ def _solve_bordered(
             judge: Merit = merit
             slope = merit.slope(ev, lin.value, du, dmu, K_du)
             current = merit.value(ev, u, mu, lin.value)
+            start: float | None = None  # the merit's derivative at u, near round-off
             if not math.isfinite(current):
                 slope = -1.0  # a start where the merit is not defined: any point will do
             elif slope is None or abs(slope) <= _ROUND_OFF * abs(current):
-                judge = fallback  # a decrease at round-off: judged by the residual
-                slope = fallback.slope(ev, lin.value, du, dmu, K_du)
-                current = fallback.value(ev, u, mu, lin.value)
+                if slope is not None:  # a change at round-off: measured from the forces
+                    start = merit.derivative(ev, lin, du, dmu)
+                if start is None:  # or, where the merit cannot, judged by the residual
+                    judge = fallback
+                    slope = fallback.slope(ev, lin.value, du, dmu, K_du)
+                    current = fallback.value(ev, u, mu, lin.value)
             if slope is None or not slope < 0.0:
                 theta = solver.increase(theta)
                 continue
+            measure = _Decrease(judge, current, start, du, dmu)
             accepted, value = _try(problem_at, constraint, judge, u, mu, du, dmu, 1.0, current)
             if accepted is None:
                 rho = -math.inf
             elif not math.isfinite(current):
                 rho = 1.0  # from a start where the merit is not defined
             else:
-                rho = (current - value) / (-0.5 * slope)
+                rho = measure(accepted, value, 1.0) / (-0.5 * slope)
             if rho < 0.25:  # the trust rules of the Newton solver (``RegularisedSolver``)
                 theta = solver.increase(theta)
             elif rho > 0.75:
                 theta = solver.decrease(theta)
             if accepted is None or rho <= 0.0:
                 accepted = _line_search(
-                    problem_at, constraint, judge, u, mu, du, dmu, current, slope
+                    problem_at, constraint, judge, u, mu, du, dmu, measure, slope
                 )
             if accepted is not None:
                 break
@@ -377,6 +402,30 @@ def _try(
     return (trial_u, trial_mu, problem, trial, lin), value
 
 
+@dataclass(frozen=True)
+class _Decrease:
+    """The merit's decrease from u to a trial point alpha (du, dmu) along the step: current
+    minus the trial's value; where the change is at round-off in the merit (``start``, the
+    merit's derivative along the step at u, is given), by the trapezoidal rule from the
+    derivatives at both ends, -alpha (d(0) + d(alpha)) / 2: exact for a quadratic merit,
+    and as precise as the forces (module docstring)."""
+
+    merit: Merit
+    current: float
+    start: float | None
+    du: np.ndarray
+    dmu: float
+
+    def __call__(self, found: Trial, value: float, alpha: float) -> float:
+        if self.start is None:
+            return self.current - value
+        _, _, _, trial, lin = found
+        end = self.merit.derivative(trial, lin, self.du, self.dmu)
+        if end is None:
+            return self.current - value
+        return -0.5 * alpha * (self.start + end)
+
+
 def _line_search(
     problem_at: Callable[[float], SteppedProblem],
     constraint: Constraint,
@@ -385,17 +434,19 @@ def _line_search(
     mu: float,
     du: np.ndarray,
     dmu: float,
-    current: float,
+    measure: _Decrease,
     slope: float,
 ) -> Trial | None:
     """The longest of the fractions 1/2, 1/4, ... of a step whose full length was rejected
-    that lowers the merit by Armijo's fraction of what its slope predicts; the new point, its
-    problem, evaluation and constraint, or None."""
+    that lowers the merit (as ``measure`` measures it) by Armijo's fraction of what its
+    slope predicts; the new point, its problem, evaluation and constraint, or None."""
     alpha = 0.5
+    current = measure.current
     for _ in range(_HALVINGS):
         found, value = _try(problem_at, constraint, merit, u, mu, du, dmu, alpha, current, False)
         if found is not None and (
-            not math.isfinite(current) or value <= current + _SUFFICIENT * alpha * slope
+            not math.isfinite(current)
+            or measure(found, value, alpha) >= -_SUFFICIENT * alpha * slope
         ):
             trial_u, trial_mu, problem, _, lin = found
             trial = try_evaluate(problem, trial_u)  # now with the tangent

@@ -194,6 +194,17 @@ class VolumeLagrangian:
             self.rho = max(self.rho, 2.0 * unpenalised / (c * c))
         return unpenalised - self.rho * c * c
 
+    def derivative(
+        self, ev: Evaluation, lin: Linearised, du: np.ndarray, dmu: float
+    ) -> float | None:
+        """dphi = (-R + rho c g).du - p c dmu at the point of ev (R its residual, -dE/du)
+        and lin (c, g = dV/du)."""
+        if not np.isfinite(ev.energy):
+            return None
+        c = lin.value
+        along = 0.0 if lin.gradient is None else float(lin.gradient @ du)
+        return -float(ev.residual @ du) + self.rho * c * along - self.pressure * c * dmu
+
 
 @dataclass(frozen=True)
 class GasEnergy:
@@ -221,6 +232,12 @@ class GasEnergy:
     def slope(
         self, ev: Evaluation, c: float, du: np.ndarray, dmu: float, K_du: np.ndarray
     ) -> float | None:
+        return self.derivative(ev, None, du, dmu)
+
+    def derivative(
+        self, ev: Evaluation, lin: Linearised | None, du: np.ndarray, dmu: float
+    ) -> float | None:
+        """-R.du at the point of ev, its pressure the gas's there (``project``)."""
         return -float(ev.residual @ du) if np.isfinite(ev.energy) else None
 
 
