@@ -51,6 +51,54 @@ def test_a_crushed_or_collapsed_state_is_inadmissible():
     assert message is not None and "volume" in message
 
 
+def test_a_state_stretched_beyond_any_membrane_shows_divergence():
+    """An iterate with an element stretched to more than MAX_AREA_RATIO (1e6) times its
+    reference area shows a diverging solve: the octant scaled 1,001 times (area ratio
+    1.002e6) does, 999 times (0.998e6) and the reference state do not. The shortcut for small
+    motions (``_free_motion``) is a bound, checked against the areas themselves on motions
+    from well below to well above it."""
+    from wrinkle.system import MAX_AREA_RATIO
+
+    case = balloon(1000.0, 1)
+    system = case.model.discretise()
+    X = case.model.mesh.nodes
+    assert system.diverging(np.zeros(X.size)) is None
+    assert system.diverging((X * 998.0).ravel()) is None
+    message = system.diverging((X * 1000.0).ravel())
+    assert message is not None and "times its reference area" in message
+    bound = system._free_motion
+    assert 0.0 < bound < 1000.0 * np.abs(X).max()
+    rng = np.random.default_rng(3)
+    for scale in (0.5, 1.0, 2.0, 20.0):
+        u = rng.uniform(-1.0, 1.0, X.size) * scale * bound
+        x = system.element_coordinates(u)
+        edges = x[:, :2] - x[:, 2:3]
+        ratio = np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1) / (
+            2.0 * system.geometry.area
+        )
+        assert (system.diverging(u) is not None) == bool(ratio.max() > MAX_AREA_RATIO)
+        if np.abs(u).max() <= bound:
+            assert ratio.max() <= MAX_AREA_RATIO
+
+
+def test_a_solve_above_the_limit_stops_as_soon_as_it_diverges():
+    """1.3 times the limit pressure on the 64-element octant in one step, no cut-back: the
+    balloon inflates without bound, and the solve stops at the first iterate with an element
+    stretched beyond any membrane (14 iterations) instead of spending the 400 iterations of
+    the end of the path from the reference state (0.8 s before, 6 December 2026)."""
+    case = read_case(
+        SPHERE,
+        {
+            "mesh": {"sphere": {"radius": 0.1, "n": 8}},
+            "load": [{"kind": "pressure", "value": 1.3 * REFERENCE.limit_pressure}],
+            "solver": {"steps": 1, "min_step": 1.0},
+        },
+    )
+    with pytest.raises(ConvergenceError, match="the solve diverges: element") as caught:
+        case.solve()
+    assert len(caught.value.history) < 100
+
+
 @pytest.mark.parametrize("steps", [1, 10])
 def test_the_balloon_above_its_limit_ends_at_the_limit_with_the_message(steps):
     """5,500 Pa on the 64-element octant (limit 5,009 Pa from the closed form on its

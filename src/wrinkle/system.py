@@ -65,6 +65,10 @@ MIN_AREA_RATIO = 1e-6
 # likewise for the volume a pressurised membrane encloses (against the origin, so against
 # symmetry planes through it), where its reference state encloses one
 MIN_VOLUME_RATIO = 1e-6
+# An element stretched to more than this many times its reference area (a triangle stretched
+# a thousandfold in both directions) is beyond any membrane: a solve whose iterate gets there
+# is diverging, as a balloon above its limit pressure inflates without bound.
+MAX_AREA_RATIO = 1e6
 
 StiffnessSink = Callable[[np.ndarray | slice, np.ndarray], None]
 
@@ -237,6 +241,7 @@ class DiscreteSystem:
         self._inverse_order = np.argsort(order) if len(self.groups) > 1 else None
         self.force_round_off = self._force_round_off()
         self._reference_volume: float | None = None  # enclosed by the pressurised elements
+        self._motion_bound: float | None = None  # ``_free_motion``
         self.cables = cables
         self._pressure_potential: bool | None = None  # pressure_has_potential, once
         if cables is not None:
@@ -806,10 +811,7 @@ class DiscreteSystem:
         one, where that is not zero. Non-finite coordinates are inadmissible too."""
         if not np.all(np.isfinite(x_elements)):
             return "the coordinates are not finite"
-        edges = x_elements[:, :2] - x_elements[:, 2:3]
-        ratio = np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1) / (
-            2.0 * self.geometry.area
-        )
+        ratio = self._area_ratios(x_elements)
         collapsed = np.flatnonzero(ratio < MIN_AREA_RATIO)
         if collapsed.size:
             worst = int(collapsed[np.argmin(ratio[collapsed])])
@@ -828,6 +830,40 @@ class DiscreteSystem:
                 f"value {abs(reference):.3g} (below {MIN_VOLUME_RATIO:g})"
             )
         return None
+
+    def diverging(self, u: np.ndarray) -> str | None:
+        """Why the displacements u (n_dofs,) of a solve's iterate show it diverging, or
+        None: an element stretched to more than MAX_AREA_RATIO times its reference area.
+        Only where some component of u exceeds ``_free_motion`` are the areas computed."""
+        if not float(np.max(np.abs(u), initial=0.0)) > self._free_motion:
+            return None
+        ratio = self._area_ratios(self.element_coordinates(u))
+        worst = int(np.argmax(ratio))
+        if not ratio[worst] > MAX_AREA_RATIO:
+            return None
+        return (
+            f"element {worst} stretched to {ratio[worst]:.3g} times its reference area (more "
+            f"than {MAX_AREA_RATIO:g}), beyond any membrane"
+        )
+
+    def _area_ratios(self, x_elements: np.ndarray) -> np.ndarray:
+        """Each element's current over reference area, (n_elements,), from its current node
+        coordinates x_elements (n_elements, 3, 3)."""
+        edges = x_elements[:, :2] - x_elements[:, 2:3]
+        area = np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
+        return area / (2.0 * self.geometry.area)
+
+    @property
+    def _free_motion(self) -> float:
+        """The largest displacement component (length units) below which no element can exceed
+        MAX_AREA_RATIO: an edge of reference length L is then at most L + 2 sqrt(3) U long,
+        and an element's area at most (L_e + 2 sqrt(3) U)^2 / 2, L_e its longest edge."""
+        if self._motion_bound is None:
+            nodes = self.mesh.nodes[self.mesh.triangles]  # (n_elements, 3, 3)
+            longest = np.max(np.linalg.norm(nodes - np.roll(nodes, 1, axis=1), axis=2), axis=1)
+            reach = np.sqrt(2.0 * MAX_AREA_RATIO * self.geometry.area) - longest
+            self._motion_bound = max(float(np.min(reach)) / (2.0 * math.sqrt(3.0)), 0.0)
+        return self._motion_bound
 
     def pressure_work(
         self, u: np.ndarray, x_elements: np.ndarray | None = None, pressure_factor: float = 1.0
@@ -1143,6 +1179,7 @@ class StepProblem:
             lambda: system.inadmissible(system.element_coordinates(u)),
             result if keep_elements else None,
             later,
+            lambda: system.diverging(u),
         )
 
     def _others_add_stiffness(self) -> bool:

@@ -82,6 +82,9 @@ class Evaluation:
         (the sensitivities of ``wrinkle.identification``); None otherwise.
     later: where the stiffness was deferred (``wrinkle.system.StepProblem.evaluate`` with
         ``defer``), the function that forms it (``with_stiffness``); None otherwise.
+    divergence: a function giving why the state shows the solve diverging (an element
+        stretched beyond any membrane), or None; called for accepted iterates
+        (``diverging``). None: never.
     """
 
     residual: np.ndarray
@@ -97,6 +100,7 @@ class Evaluation:
     admissibility: Callable[[], str | None] | None = None
     elements: Any = None
     later: Callable[[], sp.csr_matrix] | None = None
+    divergence: Callable[[], str | None] | None = None
 
     def with_stiffness(self) -> Evaluation:
         """This evaluation with its deferred stiffness formed (``later``); itself where the
@@ -110,6 +114,12 @@ class Evaluation:
         """Why the state is not a physical one, or None (``admissibility``); a solve never
         ends on such a state."""
         return None if self.admissibility is None else self.admissibility()
+
+    @property
+    def diverging(self) -> str | None:
+        """Why the state shows the solve diverging, or None (``divergence``): a solve stops
+        there."""
+        return None if self.divergence is None else self.divergence()
 
     @property
     def residual_norm(self) -> float:
@@ -586,6 +596,9 @@ class RegularisedSolver(ABC):
                     history,
                 )
             history.append(ev.residual_norm)
+            reason = ev.diverging
+            if reason is not None:  # (a load above what the membrane can carry)
+                raise ConvergenceError(f"{self.method}: the solve diverges: {reason}", history)
             accepted = AcceptedStep(ev.energy, predicted, rho, full, step_theta, u, ev)
         raise ConvergenceError(
             f"{self.method}: not converged in {limit} iterations "
