@@ -30,6 +30,7 @@ from wrinkle.timing import LINEAR, Stopwatch
 __all__ = [
     "AcceptedStep",
     "ConvergenceError",
+    "Diverging",
     "Evaluation",
     "EvaluationFailure",
     "InadmissibleState",
@@ -217,6 +218,11 @@ class ConvergenceError(RuntimeError):
 class InadmissibleState(ConvergenceError):
     """A solve reached balance in a state that is not physical (collapsed elements or a
     collapsed enclosed volume): a failure, never an answer."""
+
+
+class Diverging(ConvergenceError):
+    """A solve's iterate left every membrane state behind (an element stretched beyond
+    ``wrinkle.system.MAX_AREA_RATIO``): the load may exceed what the membrane can carry."""
 
 
 class EvaluationFailure(RuntimeError):
@@ -598,7 +604,7 @@ class RegularisedSolver(ABC):
             history.append(ev.residual_norm)
             reason = ev.diverging
             if reason is not None:  # (a load above what the membrane can carry)
-                raise ConvergenceError(f"{self.method}: the solve diverges: {reason}", history)
+                raise Diverging(f"{self.method}: the solve diverges: {reason}", history)
             accepted = AcceptedStep(ev.energy, predicted, rho, full, step_theta, u, ev)
         raise ConvergenceError(
             f"{self.method}: not converged in {limit} iterations "

@@ -26,6 +26,7 @@ import numpy as np
 
 from wrinkle.solvers.base import (
     ConvergenceError,
+    Diverging,
     Evaluation,
     Problem,
     RegularisedSolver,
@@ -670,7 +671,12 @@ def follow_load_path(
                     f"load step to factor {trial_factor:.6g} failed with increment "
                     f"{increment.value:.3g} (minimum {controller.min_step:.3g}): {error}"
                 )
-                if previous is None and _under_pressure(system):
+                # (not where it diverged: that is no small pressure creeping)
+                if (
+                    previous is None
+                    and _under_pressure(system)
+                    and not isinstance(error, Diverging)
+                ):
                     message += f"; {SMALL_PRESSURE_HINT}"
                 relative = slope.limit_point()
                 if relative is not None or isinstance(error, PastALimit):
