@@ -278,6 +278,45 @@ def test_the_volume_gradient_is_the_derivative_of_the_volume():
         assert gradient[dof] == pytest.approx(fd, rel=1e-7, abs=1e-12)
 
 
+@pytest.mark.parametrize("kind", ["volume", "gas"])
+def test_the_merits_derivative_along_a_step_is_its_rate_of_change(kind):
+    """``Merit.derivative`` of volume control's augmented Lagrangian and of a gas load's
+    energy, the measure of their changes near convergence, against central differences of
+    the merits themselves along a random step (du, dmu) from a random state near the
+    inflated 8 x 8 airbag's (the gas's pressure projected at every point), with the
+    constraint and merit the model makes for the case."""
+    mesh = {"rectangle": {"nx": 8, "ny": 8}}
+    inflated = read_case(AIRBAG, {"mesh": mesh}).solve().final
+    volume = inflated.enclosed_volume
+    if kind == "volume":
+        overrides = {"solver": {"control": "volume", "volume": 1.02 * volume}}
+    else:
+        gas = {"kind": "gas", "amount": 1.06e5 * volume, "ambient": 1.0e5}
+        overrides = {"load": [gas]}
+    case = read_case(AIRBAG, {"mesh": mesh, **overrides})
+    system = case.model.discretise()
+    constraint, merit = case.model._volume_constraints(system, case.settings, "test")(1.0)
+    if kind == "volume":
+        merit.rho = 3.0e4  # (as a solve may have made it)
+    rng = np.random.default_rng(5)
+    noise = 1e-3 * rng.normal(size=system.n_dofs)
+    u = np.where(system.constrained, 0.0, inflated.displacement + noise)
+    du = np.where(system.constrained, 0.0, rng.normal(size=system.n_dofs))
+    mu, dmu = (0.9, 0.3) if kind == "volume" else (0.0, 0.0)
+
+    def at(s):
+        point = u + s * du
+        factor = merit.project(point, mu + s * dmu)
+        ev = system.at(1.0, pressure_factor=factor).evaluate(point, stiffness=False)
+        lin = constraint(point, factor)
+        return merit.value(ev, point, factor, lin.value), ev, lin
+
+    _, ev, lin = at(0.0)
+    h = 1e-6
+    rate = (at(h)[0] - at(-h)[0]) / (2 * h)
+    assert merit.derivative(ev, lin, du, dmu) == pytest.approx(rate, rel=1e-5)
+
+
 def test_closure_by_symmetry_planes_and_held_edges():
     """The octant and the airbag are closed (symmetry planes through the origin, seams held
     in z); the airbag without its x = 0 support, or lifted off the origin, is not."""
