@@ -105,6 +105,7 @@ class LoadLevels(Protocol):
 
 # said where a path under pressure fails before any load level converges (docs/solvers.md,
 # the step controller): the cut-backs of the first step went down to min_step in vain
+FLAT = 1e-9  # a sheet whose nodes lie within this share of its extent of one plane is flat
 SMALL_PRESSURE_HINT = (
     "no load level converged; on a membrane that starts flat and unstressed a pressure is "
     "harder the smaller it is, so cutting the step back does not help: raise [solver] "
@@ -563,13 +564,32 @@ class Resume:
     controller: Mapping[str, Any]
 
 
-def _under_pressure(system: LoadLevels) -> bool:
-    """Whether the system's loads include a pressure (a ``DiscreteSystem``'s ``loading``) on
-    a sheet without bending stiffness (``SMALL_PRESSURE_HINT`` names it as the remedy)."""
+def _under_pressure(system: LoadLevels, u: np.ndarray) -> bool:
+    """Whether ``SMALL_PRESSURE_HINT`` applies to a path that starts at u (n_dofs,): the
+    system's loads include a pressure (a ``DiscreteSystem``'s ``loading``), the sheet has no
+    bending stiffness (the hint names it as the remedy), and at u it is flat and unstressed
+    (``_flat_and_unstressed``), the state the hint is about."""
     loading = getattr(system, "loading", None)
     if loading is None or getattr(system, "bending", None) is not None:
         return False
-    return bool(np.any(loading.pressure))
+    return bool(np.any(loading.pressure)) and _flat_and_unstressed(system, u)
+
+
+def _flat_and_unstressed(system: LoadLevels, u: np.ndarray) -> bool:
+    """Whether the sheet at u (n_dofs,) lies in one plane, to FLAT times its extent (the
+    smallest principal extent of the nodes' current positions), and carries no stress (its
+    internal forces within the round-off of the convergence test; a prestress is a stress).
+    A balloon, a sheet already inflated, stretched or prestressed is not: for those a small
+    pressure is no harder than a large one."""
+    mesh, forces = getattr(system, "mesh", None), getattr(system, "internal_forces", None)
+    if mesh is None or forces is None:
+        return False
+    x = mesh.nodes + u.reshape(-1, 3)
+    centred = x - x.mean(axis=0)
+    spread = np.sqrt(np.maximum(np.linalg.eigvalsh(centred.T @ centred), 0.0))
+    if spread[0] > FLAT * spread[-1]:
+        return False
+    return float(np.linalg.norm(forces(u))) <= float(getattr(system, "force_round_off", 0.0))
 
 
 def follow_load_path(
@@ -674,7 +694,7 @@ def follow_load_path(
                 # (not where it diverged: that is no small pressure creeping)
                 if (
                     previous is None
-                    and _under_pressure(system)
+                    and _under_pressure(system, u)
                     and not isinstance(error, Diverging)
                 ):
                     message += f"; {SMALL_PRESSURE_HINT}"
