@@ -113,6 +113,7 @@ SOLVER_KEYS = {
     "regrow_after",
     "linear_solver",
     "look_ahead",
+    "elimination",
     "nested",
     "convergence",
     "accuracy_energy",
@@ -645,6 +646,9 @@ def read_case(path: str | os.PathLike, overrides: dict[str, Any] | None = None) 
             reader.fail(where, f"probe name {str(name)!r} is used twice (each probe needs its own)")
         probes[str(name)] = reader.nodes(mesh, table, where)
     settings = _read_solver(reader, data.get("solver", {}))
+    obstacle = model.elimination_obstacle()
+    if settings.elimination and obstacle is not None:
+        reader.fail("[solver]", f"elimination = true: {obstacle}")
     if settings.stop is not None and settings.stop[0] not in probes:
         reader.fail(
             "[solver]",
@@ -1267,7 +1271,7 @@ def _read_solver(reader: _Reader, table: dict, where: str = "[solver]") -> Solve
         probe = reader.string(stop, "probe", where + " stop")
         displacement = reader.number(stop, "displacement", where + " stop", positive=True)
         solver["stop"] = (probe, float(displacement))
-    for key in ("look_ahead", "nested"):
+    for key in ("look_ahead", "elimination", "nested"):
         if key in table:
             if not (isinstance(table[key], bool) or (key == "nested" and table[key] == "auto")):
                 values = 'true, false or "auto"' if key == "nested" else "true or false"

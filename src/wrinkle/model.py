@@ -736,6 +736,22 @@ class Model:
         ``discretise``), to free their memory."""
         self._system = self._pattern = self._geometry = self._bending = None
 
+    def elimination_obstacle(self) -> str | None:
+        """Why nonlinear elimination (``wrinkle.solvers.elimination``) cannot solve patches
+        of this model, or None: it solves a pure membrane's."""
+        parts = [
+            name
+            for name, present in (
+                ("bending stiffness", bool(np.any(self.bending > 0))),
+                ("cables", bool(self.cables)),
+                ("follower edge loads", bool(self._edge_follower)),
+            )
+            if present
+        ]
+        if not parts:
+            return None
+        return "it solves patches of a pure membrane, and this model has " + " and ".join(parts)
+
     def discretise(self) -> DiscreteSystem:
         """The discrete system of the model as it stands (made again after a change)."""
         if self._system is None:
@@ -979,6 +995,9 @@ class Model:
             )
         self.check_supports()
         system = self.discretise()
+        obstacle = self.elimination_obstacle()
+        if settings.elimination and obstacle is not None:
+            raise ValueError(f"solver elimination = true: {obstacle}")
         system.check_resolvable()
         if isinstance(start, Results):
             start = start.step_start()

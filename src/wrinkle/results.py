@@ -108,6 +108,18 @@ class Results:
         (``nested``) included."""
         return self.stopwatch.factorisations
 
+    @property
+    def elimination(self) -> dict[str, int]:
+        """The work of nonlinear elimination so far (``[solver] elimination``): patches
+        solved, their local Newton iterations and factorisations (the latter counted in
+        ``factorisations`` too); zeros without it."""
+        watch = self.stopwatch
+        return {
+            "patches": watch.patches,
+            "local_iterations": watch.local_iterations,
+            "local_factorisations": watch.local_factorisations,
+        }
+
     def append(
         self,
         load_factor: float,

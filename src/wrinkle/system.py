@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from wrinkle import compiled
-from wrinkle.assembly import SparsityPattern
+from wrinkle.assembly import DOFS_PER_NODE, SparsityPattern
 from wrinkle.bending import Bending
 from wrinkle.cables import Cables, CableState
 from wrinkle.element import (
@@ -265,6 +265,7 @@ class DiscreteSystem:
         self.initial: Loading | None = None
         self.initial_prescribed: np.ndarray | None = None
         self._motion_reactions: tuple[np.ndarray, np.ndarray] | None = None  # at 0 and 1
+        self._incidence: sp.csr_matrix | None = None  # ``grow``
 
     def along(
         self,
@@ -956,6 +957,57 @@ class DiscreteSystem:
             external = external + self.follower_forces(u, load_factor, stiffness=False)[0]
         return np.where(self.constrained, self.internal_forces(u) - external, 0.0)
 
+    def grow(self, nodes: np.ndarray, layers: int) -> np.ndarray:
+        """Nodes (n_nodes,) bool with ``layers`` rings of elements added around them: each
+        ring adds the nodes of every element that touches a node already in."""
+        if self._incidence is None:  # (n_elements, n_nodes) element-node incidence
+            triangles = self.mesh.triangles
+            n = triangles.shape[0]
+            self._incidence = sp.csr_matrix(
+                (np.ones(3 * n), triangles.ravel(), np.arange(0, 3 * n + 1, 3)),
+                shape=(n, self.mesh.n_nodes),
+            )
+        grown = np.asarray(nodes, dtype=bool).copy()
+        for _ in range(layers):
+            touching = self._incidence @ grown.astype(float) > 0
+            grown = self._incidence.T @ touching.astype(float) > 0
+        return grown
+
+    def patch(
+        self, nodes: np.ndarray, u: np.ndarray, forces: np.ndarray, pressures: np.ndarray
+    ) -> tuple[DiscreteSystem, np.ndarray, np.ndarray]:
+        """The sub-system of the elements that touch ``nodes`` (n_nodes,) bool, for a
+        nonlinear solve on that patch alone (``wrinkle.solvers.elimination``): the free
+        components of those nodes stay free; every other component of the patch's nodes is
+        held at its value in u (n_dofs,). Its loads are ``forces`` (n_dofs,) and ``pressures``
+        (n_elements,), those of one load level, at its load factor 1. Every element whose
+        nodes can move is in the patch, so the patch's energy changes as the whole system's
+        does when only those nodes move. Returns (sub-system, its displacements at u, the
+        global dof of each of its dofs); no bending or cables (ValueError)."""
+        if self.bending is not None or self.cables is not None or self.has_follower_edges:
+            raise ValueError("a patch of a sheet with bending, cables or edge loads")
+        triangles = self.mesh.triangles
+        elements = np.flatnonzero(nodes[triangles].any(axis=1))
+        kept, local = np.unique(triangles[elements], return_inverse=True)
+        dofs = (DOFS_PER_NODE * kept[:, None] + np.arange(DOFS_PER_NODE)).ravel()
+        group = np.empty(self.mesh.n_elements, dtype=np.int64)
+        for index, (indices, _) in enumerate(self.groups):
+            group[indices] = index
+        mesh = Mesh(self.mesh.nodes[kept], local.reshape(-1, 3))
+        free = ~self.constrained[dofs] & np.repeat(nodes[kept], DOFS_PER_NODE)
+        held = u[dofs]
+        sub = DiscreteSystem(
+            mesh,
+            SparsityPattern(mesh.triangles, mesh.n_nodes),
+            self.geometry.subset(elements),
+            [elements_.material for _, elements_ in self.groups],
+            group[elements],
+            ~free,
+            np.where(free, 0.0, held),
+            Loading(forces[dofs], pressures[elements]),
+        )
+        return sub, held, dofs
+
     def at(
         self,
         load_factor: float = 1.0,
@@ -1181,6 +1233,22 @@ class StepProblem:
             later,
             lambda: system.diverging(u),
         )
+
+    def patch(self, nodes: np.ndarray, u: np.ndarray) -> tuple[StepProblem, np.ndarray, np.ndarray]:
+        """This level's problem on the patch of elements that touch ``nodes`` (n_nodes,) bool,
+        every component of the patch held at its value in u (n_dofs,) but the free ones of
+        those nodes (``DiscreteSystem.patch``): (problem, its displacements at u, the global
+        dof of each of its dofs). Its force scale is that of its own loads and reactions, and
+        its parts' times go to this problem's stopwatch."""
+        sub, held, dofs = self.system.patch(nodes, u, self.forces, self.pressures)
+        problem = StepProblem(sub, 1.0, sub.prescribed)
+        problem.motion_force = 0.0  # the held values are no motion of the sheet's supports
+        problem.timer = self.timer
+        return problem, held, dofs
+
+    def grow(self, nodes: np.ndarray, layers: int) -> np.ndarray:
+        """``DiscreteSystem.grow``."""
+        return self.system.grow(nodes, layers)
 
     def _others_add_stiffness(self) -> bool:
         """Whether parts besides the membrane elements (bending, cables, follower edge loads)

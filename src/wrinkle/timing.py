@@ -18,12 +18,18 @@ class Stopwatch:
 
     Parts may nest (assembly of each block inside element evaluation): the time of an inner
     part counts for it alone, not for the part around it. ``factorisations`` counts the
-    tangent factorisations made (the linear solvers add to it), failed load steps included.
+    tangent factorisations made (the linear solvers add to it), failed load steps included;
+    ``patches``, ``local_iterations`` and ``local_factorisations`` the work of nonlinear
+    elimination (``wrinkle.solvers.elimination``), its factorisations counted in
+    ``factorisations`` too.
     """
 
     def __init__(self):
         self.seconds: dict[str, float] = defaultdict(float)
         self.factorisations = 0
+        self.patches = 0
+        self.local_iterations = 0
+        self.local_factorisations = 0
         self._start = time.perf_counter()
         self._inner: list[float] = []  # seconds of inner parts, one entry per open part
 
@@ -45,6 +51,9 @@ class Stopwatch:
         for name, seconds in other.seconds.items():
             self.seconds[name] += seconds
         self.factorisations += other.factorisations
+        self.patches += other.patches
+        self.local_iterations += other.local_iterations
+        self.local_factorisations += other.local_factorisations
 
     def summary(self) -> dict[str, float]:
         """Seconds in each part, "rest" (everything else) and "total" since creation."""

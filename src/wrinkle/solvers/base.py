@@ -362,6 +362,10 @@ class RegularisedSolver(ABC):
     # (``Model.tangent_prediction``)
     tangent_predictor = True
     max_rejections = 40
+    #: nonlinear elimination after each global step (``wrinkle.solvers.elimination``), or None
+    elimination: Any = None
+    #: no log line per iteration (the local solves of nonlinear elimination)
+    quiet = False
     #: factorise the free block of a matrix whose constrained rows and columns hold only
     #: their diagonal (``FreeBlock``; False: the whole matrix, as before 4 December 2026)
     free_block = True
@@ -500,6 +504,11 @@ class RegularisedSolver(ABC):
     def decrease(self, theta: float) -> float:
         """Theta after a good step (gain ratio above 0.75)."""
 
+    def moved(self, displacement: np.ndarray) -> None:
+        """The trial point of the last step is u + displacement (n_dofs,), not u + step:
+        nonlinear elimination moved it (a ``gain_ratio`` may measure along it)."""
+        self._moved = displacement
+
     def backtrack(
         self, problem: Problem, u: np.ndarray, ev: Evaluation, step: np.ndarray
     ) -> tuple[np.ndarray, Evaluation] | None:
@@ -561,32 +570,45 @@ class RegularisedSolver(ABC):
         theta = self.initial_theta(ev.tangent, problem.free)
         accepted = AcceptedStep(ev.energy, math.nan, math.nan, False, theta, u, ev)
         for iteration in range(limit + 1):
-            log_iteration(self.method, iteration, ev, theta)
+            if not self.quiet:
+                log_iteration(self.method, iteration, ev, theta)
             if is_converged(ev, self.tolerance):
                 self._refuse_inadmissible(ev, history)
+                if self.elimination is not None:
+                    logger.info(
+                        "%s: nonlinear elimination so far: %d patches, %d local iterations",
+                        self.method,
+                        self._timer.patches,
+                        self._timer.local_iterations,
+                    )
                 return SolverResult(u, iteration, history, ev)
             if stop is not None:
                 report = stop(accepted)
                 if report is not None:
                     self._refuse_inadmissible(ev, history)
-                    logger.info("%s: stopped by the accuracy rule: %s", self.method, report)
+                    if not self.quiet:
+                        logger.info("%s: stopped by the accuracy rule: %s", self.method, report)
                     return SolverResult(u, iteration, history, ev, "accuracy", report)
             if iteration == limit:
                 break
             for _ in range(self.max_rejections):
                 step_theta = theta
                 step, predicted = self.trial_step(ev, theta, problem.free)
-                trial = None
+                trial, point = None, None
                 if step is not None and predicted > 0:
                     # the tangent formed only if the point is accepted, where the problem can
-                    trial = try_evaluate(problem, u + step, **deferring(problem))
+                    point = u + step
+                    trial = try_evaluate(problem, point, **deferring(problem))
+                    if trial is not None and self.elimination is not None:
+                        point, trial = self.elimination.relax(problem, point, trial, self.tolerance)
+                        self.moved(point - u)
                 rho = -np.inf if trial is None else self.gain_ratio(ev, trial, predicted)
                 if rho < 0.25:
                     theta = self.increase(theta)
                 elif rho > 0.75:
                     theta = self.decrease(theta)
-                if rho > 0.0 and step is not None and trial is not None:
-                    u = u + step
+                if rho > 0.0 and point is not None and trial is not None:
+                    u = point
                     ev = trial.with_stiffness()
                     full = True
                     break

@@ -122,7 +122,7 @@ class RegularisedNewton(RegularisedSolver):
         K_step = ev.tangent @ step
         # the energy model along the step, r.du and du.K.du, kept for ``backtrack``
         self._slope, self._curvature = float(r @ step), float(step @ K_step)
-        self._step = step
+        self._step = self._moved = step
         energy_model = self._slope - 0.5 * self._curvature
         self._use_energy = bool(np.isfinite(ev.energy))
         if self._use_energy:
@@ -130,19 +130,19 @@ class RegularisedNewton(RegularisedSolver):
         return step, float(r @ r - np.sum((r - K_step) ** 2))
 
     def _decrease(
-        self, ev: Evaluation, trial: Evaluation, predicted: float, fraction: float = 1.0
+        self, ev: Evaluation, trial: Evaluation, predicted: float, displacement: np.ndarray
     ) -> float:
-        """Pi(u) - Pi(u + fraction du) (J): from the energies; where the decrease predicted
-        is at round-off in Pi, int_0^1 r(u + s fraction du).(fraction du) ds by the
+        """Pi(u) - Pi(u + d) (J), d the displacement to the trial point: from the energies;
+        where the decrease predicted is at round-off in Pi, int_0^1 r(u + s d).d ds by the
         trapezoidal rule from the residuals at both ends (exact for a quadratic Pi, and as
         precise as the forces)."""
         if predicted > _ROUND_OFF * abs(ev.energy):
             return ev.energy - trial.energy
-        return 0.5 * fraction * float((ev.residual + trial.residual) @ self._step)
+        return 0.5 * float((ev.residual + trial.residual) @ displacement)
 
     def gain_ratio(self, ev: Evaluation, trial: Evaluation, predicted: float) -> float:
         if self._use_energy:
-            actual = self._decrease(ev, trial, predicted)
+            actual = self._decrease(ev, trial, predicted, self._moved)
             return actual / predicted if np.isfinite(actual) else -np.inf
         return (ev.residual_norm**2 - trial.residual_norm**2) / predicted
 
@@ -167,7 +167,8 @@ class RegularisedNewton(RegularisedSolver):
                 trial = try_evaluate(problem, shorter, stiffness=False)
             if (
                 trial is not None
-                and self._decrease(ev, trial, predicted, fraction) >= _SUFFICIENT * predicted
+                and self._decrease(ev, trial, predicted, fraction * self._step)
+                >= _SUFFICIENT * predicted
             ):
                 if trial.stiffness is not None or trial.later is not None:
                     return shorter, trial.with_stiffness()

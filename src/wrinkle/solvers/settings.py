@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from wrinkle.solvers.base import RegularisedSolver
+from wrinkle.solvers.elimination import Elimination
 from wrinkle.solvers.linear import LINEAR_SOLVERS
 from wrinkle.solvers.newton import RegularisedNewton
 from wrinkle.solvers.restricted_step import RestrictedStep
@@ -107,7 +108,9 @@ class SolverSettings:
     to the absolute ``volume``, and the pressure is the unknown); stop: (probe name,
     displacement) to end the path where the magnitude of that probe's mean displacement
     reaches the value (any control). Arc length, volume control, gas loads and a stop use
-    the Newton method.
+    the Newton method. elimination: nonlinear elimination after each global step of Newton's
+    load-controlled solves (``wrinkle.solvers.elimination``; a pure membrane under pressure,
+    forces and supports: no bending, cables or follower edge loads).
     Raises ValueError naming the first bad field.
     """
 
@@ -131,6 +134,7 @@ class SolverSettings:
     volume_ratio: float | None = None
     volume: float | None = None
     stop: tuple[str, float] | None = None
+    elimination: bool = False
 
     def __post_init__(self) -> None:
         linear_solvers = ["auto", *LINEAR_SOLVERS]
@@ -186,6 +190,7 @@ class SolverSettings:
                 "an integer >= 0",
             ),
             ("look_ahead", lambda: isinstance(self.look_ahead, bool), "true or false"),
+            ("elimination", lambda: isinstance(self.elimination, bool), "true or false"),
             (
                 "nested",
                 lambda: isinstance(self.nested, bool) or self.nested == "auto",
@@ -262,6 +267,11 @@ class SolverSettings:
                 "a stop: arc length, volume control and stops use method = 'newton'"
             )
 
+        if self.elimination and self.method != "newton":
+            raise ValueError(
+                f"solver elimination = true needs method = 'newton', got {self.method!r}"
+            )
+
     def nests(self, levels: bool, refined: bool, bending: bool) -> bool:
         """Whether a case nests its first step: nested True, or "auto" with ``levels`` given
         or the mesh ``refined`` and the sheet with ``bending``. Nesting pays with bending at
@@ -282,8 +292,12 @@ class SolverSettings:
         return dataclasses.replace(self, **given) if given else self
 
     def solver(self) -> RegularisedSolver:
-        """The nonlinear solver these settings name."""
-        return make_solver(self.method, self.tolerance, self.max_iterations, self.linear_solver)
+        """The nonlinear solver these settings name (with ``elimination``, its
+        ``Elimination``)."""
+        solver = make_solver(self.method, self.tolerance, self.max_iterations, self.linear_solver)
+        if self.elimination:
+            solver.elimination = Elimination()
+        return solver
 
     def controller(self) -> StepController:
         """The load-step controller of these settings."""
