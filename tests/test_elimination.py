@@ -148,11 +148,17 @@ def test_elimination_on_a_sheet_moved_by_its_supports():
 
 def test_elimination_is_refused_where_it_cannot_solve_patches():
     """One line naming the key: with the sheet's bending stiffness, with the restricted
-    step method, and for a value that is not true or false."""
+    step method, under volume control, with a gas load, and for a value that is not true or
+    false."""
     with pytest.raises(CaseError, match=r"\[solver\]: elimination = true: .*bending stiffness"):
         read_case(AIRBAG, {"solver": {"elimination": True}, "material": {"bending": True}})
     with pytest.raises(ValueError, match="elimination = true needs method = 'newton'"):
         SolverSettings(elimination=True, method="restricted-step")
+    with pytest.raises(ValueError, match="and control = 'load'"):
+        SolverSettings(elimination=True, control="volume", volume=1.0)
+    gas = {"kind": "gas", "amount": 1639.6, "ambient": 1.0e5, "gamma": 1.0}
+    with pytest.raises(CaseError, match="elimination = true: .*a gas load"):
+        read_case(AIRBAG, {"solver": {"elimination": True}, "load": [gas]})
     with pytest.raises(CaseError, match="'elimination' must be true or false"):
         read_case(AIRBAG, {"solver": {"elimination": "yes"}})
     assert isinstance(SolverSettings(elimination=True).solver().elimination, Elimination)

@@ -745,6 +745,7 @@ class Model:
                 ("bending stiffness", bool(np.any(self.bending > 0))),
                 ("cables", bool(self.cables)),
                 ("follower edge loads", bool(self._edge_follower)),
+                ("a gas load (its solves are bordered ones)", self.gas is not None),
             )
             if present
         ]

@@ -109,8 +109,8 @@ class SolverSettings:
     displacement) to end the path where the magnitude of that probe's mean displacement
     reaches the value (any control). Arc length, volume control, gas loads and a stop use
     the Newton method. elimination: nonlinear elimination after each global step of Newton's
-    load-controlled solves (``wrinkle.solvers.elimination``; a pure membrane under pressure,
-    forces and supports: no bending, cables or follower edge loads).
+    load-controlled solves (``wrinkle.solvers.elimination``; method "newton", control
+    "load", a pure membrane: no bending, cables, follower edge loads or gas load).
     Raises ValueError naming the first bad field.
     """
 
@@ -267,9 +267,10 @@ class SolverSettings:
                 "a stop: arc length, volume control and stops use method = 'newton'"
             )
 
-        if self.elimination and self.method != "newton":
+        if self.elimination and (self.method != "newton" or self.control != "load"):
             raise ValueError(
-                f"solver elimination = true needs method = 'newton', got {self.method!r}"
+                "solver elimination = true needs method = 'newton' and control = 'load', got "
+                f"{self.method!r} and {self.control!r}: it works on load-controlled Newton solves"
             )
 
     def nests(self, levels: bool, refined: bool, bending: bool) -> bool:
