@@ -130,15 +130,20 @@ class RegularisedNewton(RegularisedSolver):
         return step, float(r @ r - np.sum((r - K_step) ** 2))
 
     def _decrease(
-        self, ev: Evaluation, trial: Evaluation, predicted: float, displacement: np.ndarray
+        self,
+        ev: Evaluation,
+        trial: Evaluation,
+        predicted: float,
+        direction: np.ndarray,
+        fraction: float = 1.0,
     ) -> float:
-        """Pi(u) - Pi(u + d) (J), d the displacement to the trial point: from the energies;
-        where the decrease predicted is at round-off in Pi, int_0^1 r(u + s d).d ds by the
-        trapezoidal rule from the residuals at both ends (exact for a quadratic Pi, and as
-        precise as the forces)."""
+        """Pi(u) - Pi(u + d) (J), d = fraction x direction the displacement to the trial
+        point: from the energies; where the decrease predicted is at round-off in Pi,
+        int_0^1 r(u + s d).d ds by the trapezoidal rule from the residuals at both ends
+        (exact for a quadratic Pi, and as precise as the forces)."""
         if predicted > _ROUND_OFF * abs(ev.energy):
             return ev.energy - trial.energy
-        return 0.5 * float((ev.residual + trial.residual) @ displacement)
+        return 0.5 * fraction * float((ev.residual + trial.residual) @ direction)
 
     def gain_ratio(self, ev: Evaluation, trial: Evaluation, predicted: float) -> float:
         if self._use_energy:
@@ -167,7 +172,7 @@ class RegularisedNewton(RegularisedSolver):
                 trial = try_evaluate(problem, shorter, stiffness=False)
             if (
                 trial is not None
-                and self._decrease(ev, trial, predicted, fraction * self._step)
+                and self._decrease(ev, trial, predicted, self._step, fraction)
                 >= _SUFFICIENT * predicted
             ):
                 if trial.stiffness is not None or trial.later is not None:
