@@ -111,7 +111,7 @@ class Results:
     @property
     def elimination(self) -> dict[str, int]:
         """The work of nonlinear elimination so far (``[solver] elimination``): patches
-        solved, their local Newton iterations and factorisations (the latter counted in
+        tried, their local Newton iterations and factorisations (the latter counted in
         ``factorisations`` too); zeros without it."""
         watch = self.stopwatch
         return {

@@ -19,8 +19,8 @@ class Stopwatch:
     Parts may nest (assembly of each block inside element evaluation): the time of an inner
     part counts for it alone, not for the part around it. ``factorisations`` counts the
     tangent factorisations made (the linear solvers add to it), failed load steps included;
-    ``patches``, ``local_iterations`` and ``local_factorisations`` the work of nonlinear
-    elimination (``wrinkle.solvers.elimination``), its factorisations counted in
+    ``patches`` (tried), ``local_iterations`` and ``local_factorisations`` the work of
+    nonlinear elimination (``wrinkle.solvers.elimination``), its factorisations counted in
     ``factorisations`` too.
     """
 

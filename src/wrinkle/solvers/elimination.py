@@ -73,7 +73,7 @@ class Elimination:
     share: of the trial point's squared residual the patch's seed nodes carry; most: the
     largest share of the nodes seeded; layers: rings of elements grown around the seeds;
     iterations: the most local Newton iterations of one patch. The work goes to the
-    problem's stopwatch (``wrinkle.timing.Stopwatch``: patches, local iterations and
+    problem's stopwatch (``wrinkle.timing.Stopwatch``: patches tried, local iterations and
     factorisations, and the local solves' times in their parts).
     """
 
@@ -83,12 +83,18 @@ class Elimination:
     iterations: int = 100
 
     def relax(
-        self, problem: Problem, point: np.ndarray, trial: Evaluation, tolerance: float
+        self,
+        problem: Problem,
+        point: np.ndarray,
+        trial: Evaluation,
+        tolerance: float,
+        linear_solver: str = "auto",
     ) -> tuple[np.ndarray, Evaluation]:
         """(point, evaluation) after the patch of ``trial`` (problem's evaluation at point,
-        (n_dofs,)) is solved to tolerance x the trial's force scale; point and trial as they
-        were where the problem has no patches (``patch``, ``grow``), the residual is zero, or
-        the patch's solve fails."""
+        (n_dofs,)) is solved to tolerance x the trial's force scale, with the linear solver
+        named (``wrinkle.solvers.linear``); point and trial as they were where the problem
+        has no patches (``patch``, ``grow``), the residual is zero, or the patch's solve
+        fails."""
         patch, grow = getattr(problem, "patch", None), getattr(problem, "grow", None)
         seeds = seed_nodes(trial.residual, self.share, self.most)
         if patch is None or grow is None or seeds is None:
@@ -97,7 +103,9 @@ class Elimination:
             local, start, dofs = patch(grow(seeds, self.layers), point)
         except ValueError:  # bending, cables or edge loads: no patch
             return point, trial
-        solver = RegularisedNewton(tolerance=1e-16, max_iterations=self.iterations + 1)
+        solver = RegularisedNewton(
+            tolerance=1e-16, max_iterations=self.iterations + 1, linear_solver=linear_solver
+        )
         solver.quiet, solver.elimination = True, None
         timer = getattr(problem, "timer", None) or Stopwatch()
         before = timer.factorisations
@@ -107,10 +115,11 @@ class Elimination:
                 local, start, stop=_Balanced(tolerance * trial.force_scale, self.iterations)
             )
         except ConvergenceError as error:  # no acceptable local step: the point as it was
-            timer.local_iterations += len(error.history) - 1
+            timer.local_iterations += max(len(error.history) - 1, 0)
             return point, trial
         finally:
             timer.local_factorisations += timer.factorisations - before
+            solver.release()  # (PARDISO keeps MKL's memory until released)
         timer.local_iterations += solved.iterations
         if solved.iterations == 0:
             return point, trial

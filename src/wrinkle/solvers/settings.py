@@ -272,6 +272,12 @@ class SolverSettings:
                 "solver elimination = true needs method = 'newton' and control = 'load', got "
                 f"{self.method!r} and {self.control!r}: it works on load-controlled Newton solves"
             )
+        if self.elimination and self.convergence == "accuracy":
+            raise ValueError(
+                "solver elimination = true cannot go with convergence = 'accuracy': a relaxed "
+                "step's gain ratio does not show that the quadratic model held, which the "
+                "accuracy stop relies on"
+            )
 
     def nests(self, levels: bool, refined: bool, bending: bool) -> bool:
         """Whether a case nests its first step: nested True, or "auto" with ``levels`` given

@@ -103,9 +103,9 @@ class LoadLevels(Protocol):
     ) -> SteppedProblem: ...
 
 
+FLAT = 1e-9  # a sheet whose nodes lie within this share of its extent of one plane is flat
 # said where a path under pressure fails before any load level converges (docs/solvers.md,
 # the step controller): the cut-backs of the first step went down to min_step in vain
-FLAT = 1e-9  # a sheet whose nodes lie within this share of its extent of one plane is flat
 SMALL_PRESSURE_HINT = (
     "no load level converged; on a membrane that starts flat and unstressed a pressure is "
     "harder the smaller it is, so cutting the step back does not help: raise [solver] "
