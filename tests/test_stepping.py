@@ -11,7 +11,7 @@ from wrinkle.case import read_case
 from wrinkle.materials import StVenantKirchhoff
 from wrinkle.solvers import ConvergenceError, SolverSettings, StepController, follow_load_path
 from wrinkle.solvers.arc_length import _first_step, follow_arc_length
-from wrinkle.solvers.base import Evaluation, SolverResult
+from wrinkle.solvers.base import Diverging, Evaluation, SolverResult
 from wrinkle.solvers.stepping import _Increments
 
 
@@ -435,6 +435,69 @@ class CreepsDown(NeedsIterations):
             result = SolverResult(np.full(start.size, factor), self.creep, [], at_start)
         self.last = factor
         return result
+
+
+class CreepsUp(NeedsIterations):
+    """``NeedsIterations`` whose steps up across the load factor ``fold`` need ``creep``
+    iterations (the sheet going slack round a node pushed back through its plane), and whose
+    steps beyond ``limit`` diverge."""
+
+    def __init__(self, creep, fold, limit=2.0, default=True):
+        super().__init__(5, default)
+        self.creep, self.fold, self.limit, self.last = creep, fold, limit, 0.0
+
+    def solve(self, problem, start, at_start=None, iterations=None):
+        factor = problem.load_factor
+        if not self.last < self.fold <= factor and factor <= self.limit:
+            result = super().solve(problem, start, at_start, iterations)
+        else:
+            limit = self.max_iterations if iterations is None else iterations
+            self.calls.append((round(factor, 12), limit))
+            if factor > self.limit:
+                raise Diverging("the solve diverges", [])
+            if self.creep > limit:
+                raise ConvergenceError(f"not converged in {limit} iterations", [])
+            result = SolverResult(np.full(start.size, factor), self.creep, [], at_start)
+        self.last = factor
+        return result
+
+
+def test_a_step_up_that_fails_is_tried_again_with_the_creep_budget():
+    """Worked by hand, rule 9 under load control, 4 steps, a step across load factor 0.4
+    needing 250 iterations: 0.25 converges with 100 (5 iterations); 0.5 fails with 100 and
+    is tried again at the same increment with 400, where it converges; 0.75 and 1 follow
+    with 100. Needing 500, 0.5's retry fails too and the step is cut back to 0.375 (100,
+    an easy step: the increment grows back to 0.25), whose own next step, 0.625, gets the
+    budget again (one retry a level). A step that diverges is cut back at once, and a user's
+    limit holds everywhere (no retry). From a start that is not the reference state the
+    first step is tried again too."""
+    solver = CreepsUp(250, fold=0.4)
+    follow_load_path(FakeLevels(), solver, SolverSettings(steps=4).controller())
+    assert solver.calls == [(0.25, 100), (0.5, 100), (0.5, 400), (0.75, 100), (1.0, 100)]
+    solver = CreepsUp(500, fold=0.4)
+    with pytest.raises(ConvergenceError):
+        follow_load_path(FakeLevels(), solver, SolverSettings(steps=4, min_step=0.1).controller())
+    assert solver.calls[:6] == [
+        (0.25, 100),
+        (0.5, 100),
+        (0.5, 400),
+        (0.375, 100),
+        (0.625, 100),
+        (0.625, 400),
+    ]
+    solver = CreepsUp(5, fold=0.4, limit=0.6)
+    with pytest.raises(ConvergenceError, match="diverges"):
+        follow_load_path(FakeLevels(), solver, SolverSettings(steps=4, min_step=0.1).controller())
+    assert solver.calls == [(0.25, 100), (0.5, 100), (0.75, 100), (0.625, 100)]
+    solver = CreepsUp(250, fold=0.4, default=False)
+    with pytest.raises(ConvergenceError):
+        follow_load_path(FakeLevels(), solver, SolverSettings(steps=4, min_step=0.1).controller())
+    assert solver.calls[:3] == [(0.25, 100), (0.5, 100), (0.375, 100)]
+    # from a state that is not the reference one (an analysis step's start), the first
+    # step too is tried again before the end of the path is solved first (rule 3)
+    solver = CreepsUp(250, fold=0.2)
+    follow_load_path(FakeLevels(), solver, SolverSettings(steps=4).controller(), u0=np.ones(3))
+    assert solver.calls == [(0.25, 100), (0.25, 400), (0.5, 100), (0.75, 100), (1.0, 100)]
 
 
 def test_a_step_down_that_fails_is_tried_again_with_the_creep_budget():

@@ -616,7 +616,9 @@ def follow_load_path(
     the first step where it is the whole path) may take END_ROUNDS times the method's default
     iterations, or END_PER_ROOT times the square root of the free unknowns where more
     (``end_iterations``); so may the first try again after a failed step downwards
-    (``descend``).
+    (``descend``), and a step that failed, tried again once at the same increment before
+    anything else (rule 9, once a level; not the first step from the reference state, nor a
+    step that jumped past a limit point or diverged).
     on_step(load_factor, u, solved) is called after each converged step (u (n_dofs,), solved
     the ``SolverResult``); timer: a stopwatch the problems share (the time of their parts);
     first_guess(load_factor): a start for the first step, (n_dofs,), or None, such as the
@@ -641,6 +643,8 @@ def follow_load_path(
     factor = 0.0
     previous: tuple[float, np.ndarray] | None = None  # the converged state before the last
     looked_ahead = not controller.look_ahead
+    retry = False  # the next try is the step that failed, with the creep budget (rule 9)
+    budgeted = False  # whether a try from this level had the creep budget
     if resume is not None:
         factor, u = resume.factor, np.array(resume.u, dtype=float)
         previous = resume.previous
@@ -662,6 +666,14 @@ def follow_load_path(
         iterations = None
         if previous is None and not trusted and trial_factor >= 1.0 - _END:
             iterations = end_iterations(solver, u, problem.free)  # the whole path in one step
+        elif retry:  # rule 9: the step that failed, again with the creep budget
+            iterations = creep_iterations(solver, problem.free)
+            logger.info(
+                "step to %.6g failed; tried again with up to %s iterations",
+                trial_factor,
+                iterations,
+            )
+        budgeted, retry = budgeted or iterations is not None, False
         try:
             solved = solve_step(
                 problem,
@@ -674,6 +686,17 @@ def follow_load_path(
             )
             _check_state(solved, trial_factor, slope, checks)
         except ConvergenceError as error:
+            # rule 9: tried again at the same increment with the creep budget, once a level;
+            # not the first step from the reference state (rules 3 and 7), nor a jump past a
+            # limit point or a divergence
+            if (
+                (previous is not None or np.any(u))
+                and not budgeted
+                and getattr(solver, "limit_is_default", False)
+                and not isinstance(error, Diverging | PastALimit)
+            ):
+                retry = True
+                continue
             if previous is None and trial_factor >= 1.0 - _END:
                 looked_ahead = True  # the end of the path failed from this start already
             elif previous is None and not looked_ahead:
@@ -723,6 +746,7 @@ def follow_load_path(
         slope.record(trial_factor, solved.u)
         previous = (factor, u)
         factor, u = trial_factor, solved.u
+        budgeted = False
         logger.info("load factor %.6g converged in %d iterations", factor, solved.iterations)
         increment.converged(solved.iterations)
         solved.path_state = increment.state()
