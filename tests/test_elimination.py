@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from wrinkle.case import CaseError, read_case
+from wrinkle.solvers import base as solver_base
 from wrinkle.solvers import settings as solver_settings
 from wrinkle.solvers.elimination import Elimination, seed_nodes
 from wrinkle.solvers.settings import SolverSettings
@@ -130,9 +131,10 @@ def test_a_solve_with_elimination_reaches_the_same_equilibrium(n):
     assert plain.elimination["patches"] == 0
 
 
-def test_elimination_on_a_sheet_moved_by_its_supports():
+def test_elimination_on_a_sheet_moved_by_its_supports(monkeypatch):
     """The sheared rectangle 40 x 20 (every z held, the top edge moved): with elimination
-    the top edge's reaction is Newton's without it, to 1e-6 of it."""
+    the top edge's reaction is Newton's without it, to 1e-6 of it; the patches' solves use
+    the case's linear solver."""
 
     def reaction(elimination: bool) -> np.ndarray:
         case = read_case(
@@ -144,6 +146,25 @@ def test_elimination_on_a_sheet_moved_by_its_supports():
         return case.model.support_reactions(results.final.reactions)["top"]
 
     plain, eliminated = reaction(False), reaction(True)
+    # the case's linear solver serves the patches too: every back-end made is the one named
+    # ("superlu"), none "auto"
+    used = []
+    original = solver_base.make_linear_solver
+
+    def recording(name, *args, **kwargs):
+        used.append(name)
+        return original(name, *args, **kwargs)
+
+    monkeypatch.setattr(solver_base, "make_linear_solver", recording)
+    case = read_case(
+        RECTANGLE,
+        {
+            "mesh": {"rectangle": {"nx": 40, "ny": 20}},
+            "solver": {"elimination": True, "linear_solver": "superlu"},
+        },
+    )
+    assert case.solve().elimination["patches"] > 0
+    assert used and set(used) == {"superlu"}
     np.testing.assert_allclose(eliminated, plain, rtol=1e-6, atol=1e-6 * np.abs(plain).max())
 
 

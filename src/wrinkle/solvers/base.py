@@ -600,7 +600,9 @@ class RegularisedSolver(ABC):
                     point = u + step
                     trial = try_evaluate(problem, point, **deferring(problem))
                     if trial is not None and self.elimination is not None:
-                        point, trial = self.elimination.relax(problem, point, trial, self.tolerance)
+                        point, trial = self.elimination.relax(
+                            problem, point, trial, self.tolerance, self.linear_solver
+                        )
                         self.moved(point - u)
                 rho = -np.inf if trial is None else self.gain_ratio(ev, trial, predicted)
                 if rho < 0.25:
