@@ -51,10 +51,10 @@ from wrinkle.solvers.stepping import (
     OnStep,
     StepController,
     SteppedProblem,
-    creep_iterations,
     end_iterations,
     extrapolate,
     follow_load_path,
+    retry_iterations,
 )
 from wrinkle.timing import Stopwatch
 
@@ -359,12 +359,7 @@ def follow_volume_path(
         if trial_t == 1.0 and not np.any(start_u):  # rule 7: the whole path from rest
             iterations = end_iterations(solver, start_u, family.at(start_mu).free)
         elif retry:  # rule 9: the step that failed, again with the creep budget
-            iterations = creep_iterations(solver, family.at(start_mu).free)
-            logger.info(
-                "step to %.6g failed; tried again with up to %s iterations",
-                trial_t,
-                iterations,
-            )
+            iterations = retry_iterations(solver, family.at(start_mu).free, trial_t)
         budgeted, retry = budgeted or iterations is not None, False
         try:
             solved = solve_bordered(

@@ -50,6 +50,7 @@ __all__ = [
     "end_iterations",
     "extrapolate",
     "follow_load_path",
+    "retry_iterations",
     "solve_step",
     "tangent_prediction",
 ]
@@ -256,6 +257,15 @@ def creep_iterations(solver: RegularisedSolver, free: np.ndarray) -> int | None:
         return None
     by_size = math.ceil(END_PER_ROOT * math.sqrt(np.count_nonzero(free)))
     return max(END_ROUNDS * solver.max_iterations, by_size)
+
+
+def retry_iterations(solver: RegularisedSolver, free: np.ndarray, target: float) -> int | None:
+    """The iteration limit of a failed step tried again at the same increment (rule 9 of the
+    step controller): ``creep_iterations``, logged with the step's target (load factor or
+    path parameter); free (n_dofs,) bool."""
+    limit = creep_iterations(solver, free)
+    logger.info("step to %.6g failed; tried again with up to %s iterations", target, limit)
+    return limit
 
 
 def end_iterations(solver: RegularisedSolver, u: np.ndarray, free: np.ndarray) -> int | None:
@@ -667,12 +677,7 @@ def follow_load_path(
         if previous is None and not trusted and trial_factor >= 1.0 - _END:
             iterations = end_iterations(solver, u, problem.free)  # the whole path in one step
         elif retry:  # rule 9: the step that failed, again with the creep budget
-            iterations = creep_iterations(solver, problem.free)
-            logger.info(
-                "step to %.6g failed; tried again with up to %s iterations",
-                trial_factor,
-                iterations,
-            )
+            iterations = retry_iterations(solver, problem.free, trial_factor)
         budgeted, retry = budgeted or iterations is not None, False
         try:
             solved = solve_step(
