@@ -151,7 +151,7 @@ def solve(spec: dict[str, Any]) -> dict[str, Any]:
     model = case.model
     print("ROW " + json.dumps({"elements": model.mesh.n_elements}), flush=True)
     u0 = shrunk(case) if spec.get("start") == "shrunk" else None  # every element slack
-    start = time.perf_counter()
+    start, reason = time.perf_counter(), ""
     try:
         results = case.solve() if u0 is None else model.solve(case.settings, u0=u0)
         converged = "yes"
@@ -167,7 +167,7 @@ def solve(spec: dict[str, Any]) -> dict[str, Any]:
         "factorisations": getattr(results, "factorisations", ""),
         "time_s": f"{seconds:.1f}",
         "peak_mb": f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f}",
-        "result": "" if converged == "yes" else reason,
+        "result": reason,
     }
     if converged == "yes":
         u = results.final.displacement
