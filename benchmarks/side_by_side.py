@@ -1,7 +1,7 @@
 """Issue 18's cases solved by the solver of the day the issue was filed and by the present
 one, in turns in one run, each solve in its own process with PYTHONPATH set to its tree.
 
-The solver of that day is commit 7aa4a5b (2 December 2026, the last commit before the work
+The solver of that day is commit 7aa4a5b (1 December 2026, the last commit before the work
 of issue 18): check it out beside this one, ``git worktree add ../filed 7aa4a5b``, and pass
 its ``src``. Both trees read the same case files, those of this checkout. Each case is solved
 with the tree's default settings; a case may also be given settings the old tree does not
@@ -141,9 +141,11 @@ def solve(spec: dict[str, Any]) -> dict[str, Any]:
     trees have: read_case with overrides, Case.solve, Model.solve(u0=), Results.steps."""
     import numpy as np
 
+    import wrinkle
     from wrinkle.case import read_case
     from wrinkle.solvers import ConvergenceError
 
+    print("ROW " + json.dumps({"package": str(Path(wrinkle.__file__).resolve())}), flush=True)
     try:
         case = read_case(spec["path"], overrides=spec["overrides"])
     except ValueError as error:  # a key the tree does not know
@@ -158,6 +160,8 @@ def solve(spec: dict[str, Any]) -> dict[str, Any]:
     except ConvergenceError as error:
         results, converged = error.results, "NO"
         reason = str(error).split(": ", 1)[-1][:90]
+    except Exception as error:  # anything else ends the run: say what
+        return {"converged": "error", "result": f"{type(error).__name__}: {error}"[:90]}
     seconds = time.perf_counter() - start
     row = {
         "elements": model.mesh.n_elements,
@@ -216,9 +220,12 @@ def run(spec: dict[str, Any], tree: str, time_limit: float) -> dict[str, Any]:
         out, _ = child.communicate()
         row = {"converged": "stopped", "time_s": f"> {time_limit:.0f}", "peak_mb": peak}
         row["result"] = f"not finished in {time_limit:.0f} s"
-    for line in out.splitlines():  # the elements once read, then the whole row
+    for line in out.splitlines():  # the package, the elements once read, the whole row
         if line.startswith("ROW "):
             row.update(json.loads(line[4:]))
+    package = Path(row.pop("package", ""))
+    if Path(tree) not in package.parents:  # the installed package, not the tree's
+        row = {"converged": "cannot run", "result": f"{tree} was not imported ({package})"}
     return {"case": spec["name"], "tree": tree, **row}
 
 
@@ -237,6 +244,10 @@ def main() -> None:
         return
     if not args.filed:
         parser.error("--filed: the src folder of a checkout of 7aa4a5b is needed")
+    args.filed, args.present = (str(Path(tree).resolve()) for tree in (args.filed, args.present))
+    for tree in (args.filed, args.present):
+        if not (Path(tree) / "wrinkle" / "__init__.py").is_file():
+            parser.error(f"{tree}: not the src folder of a wrinkle tree")
     rows = []
     with tempfile.TemporaryDirectory(prefix="side-by-side-") as scratch:
         for spec in cases(args.large, Path(scratch)):
@@ -252,7 +263,8 @@ def main() -> None:
     print("| " + " | ".join(FIELDS) + " |")
     print("|" + " --- |" * len(FIELDS))
     for row in rows:
-        print("| " + " | ".join(str(row.get(name, "")) for name in FIELDS) + " |")
+        cells = (str(row.get(name, "")).replace("|", "\\|") for name in FIELDS)
+        print("| " + " | ".join(cells) + " |")
     write_csv(args.csv, rows, FIELDS)
 
 
