@@ -14,7 +14,9 @@ unstructured gmsh meshes of about as many triangles (``airbag_gmsh``, ``airbag_g
 benchmarks/gmsh_airbag.py, which needs the mesh extra), and the bending gmsh airbag solved
 first on independent gmsh meshes of about 1/16 and 1/4 as many triangles
 (``airbag_gmsh_levels``: ``[mesh] levels``, wrinkle.transfer). For each: elements,
-unknowns, load steps, Newton iterations, wall time split into element evaluation, assembly,
+unknowns, load steps, Newton iterations, the factorisations of the whole run and of its
+finest mesh alone (the coarse levels of a nested solve left out: issue 18's measure), wall
+time split into element evaluation, assembly,
 linear solves and the rest (``Results.timings``), the peak resident set, and the result
 (airbag: centre deflection; square: top-edge force F1). The case's load steps are kept (no
 cut-back); a mesh whose step does not converge within
@@ -144,6 +146,8 @@ FIELDS = [
     "steps",
     "iterations",
     "max_per_step",
+    "factorisations",
+    "finest_factorisations",
     "converged",
     "element_s",
     "assembly_s",
@@ -165,11 +169,14 @@ def make_row(
     timings: dict | None,
     total: float,
     result: float,
+    factorisations: tuple[int, int] | None = None,
 ) -> dict:
     """A row of the table from the columns known before the solve, the Newton iterations of
-    each load step, the stopwatch's seconds per part (``Results.timings``; None: not known)
-    and the wall time since the process began the case."""
+    each load step, the stopwatch's seconds per part (``Results.timings``; None: not known),
+    the wall time since the process began the case, and the factorisations of the whole run
+    and of its finest mesh alone (None: not known)."""
     nan = float("nan")
+    every, finest = factorisations if factorisations is not None else (nan, nan)
     element, assembly, linear = (
         (timings[part] if timings else nan)
         for part in ("element evaluation", "assembly", "linear solves")
@@ -178,6 +185,8 @@ def make_row(
         **known,
         "iterations": sum(per_step),
         "max_per_step": max(per_step),
+        "factorisations": every,
+        "finest_factorisations": finest,
         "converged": converged,
         "element_s": element,
         "assembly_s": assembly,
@@ -285,10 +294,20 @@ def solve_one(
         log.addHandler(handler)
         log.setLevel(logging.INFO)
     failed = None
+    stopwatch = results.stopwatch
+    coarse_factorisations = 0  # those of the coarser meshes, charged to the same stopwatch
     try:
         first_guess = None
         if case.coarse:  # the coarse levels' time counts: the stopwatch is the solve's
-            first_guess = NestedStart(case.coarse, model, settings, results.stopwatch)
+            nested = NestedStart(case.coarse, model, settings, stopwatch)
+
+            def first_guess(load_factor: float) -> np.ndarray | None:
+                nonlocal coarse_factorisations
+                before = stopwatch.factorisations
+                start = nested(load_factor)
+                coarse_factorisations += stopwatch.factorisations - before
+                return start
+
         follow_load_path(
             model.discretise(),
             settings.solver(),
@@ -317,7 +336,9 @@ def solve_one(
             top = model.mesh.node_sets["top"]
             result = float(results.final.reactions.reshape(-1, 3)[top, 0].sum())
     total = time.perf_counter() - start
-    return make_row(known, per_step, failed is None, timings, total, result)
+    every = stopwatch.factorisations
+    counts = (every, every - coarse_factorisations)
+    return make_row(known, per_step, failed is None, timings, total, result, counts)
 
 
 def stopped_row(progress: Path, time_limit: float) -> dict | None:
@@ -352,6 +373,7 @@ def print_row(row: dict) -> None:
     print(
         f"{row['problem']:>13} {row['elements']:9d} {row['unknowns']:9d} "
         f"{row['steps']:5d} {row['iterations']:5d} {row['max_per_step']:8d} "
+        f"{row['factorisations']:6.0f} {row['finest_factorisations']:6.0f} "
         f"{row['element_s']:10.2f} {row['assembly_s']:10.2f} {row['linear_s']:9.2f} "
         f"{row['rest_s']:7.2f} {row['total_s']:8.1f} {row['outside_linear']:10.0%} "
         f"{row['peak_rss_mb']:8.0f}  {result}",
@@ -420,8 +442,8 @@ def main() -> None:
         return
     print(
         f"{'problem':>13} {'elements':>9} {'unknowns':>9} {'steps':>5} {'iter':>5} "
-        f"{'max/step':>8} {'elements s':>10} {'assembly s':>10} {'linear s':>9} "
-        f"{'rest s':>7} {'total s':>8} {'not linear':>10} {'peak MB':>8}  result"
+        f"{'max/step':>8} {'fact':>6} {'finest':>6} {'elements s':>10} {'assembly s':>10} "
+        f"{'linear s':>9} {'rest s':>7} {'total s':>8} {'not linear':>10} {'peak MB':>8}  result"
     )
     rows = []
     runs = [(problem, n) for problem in args.problems for n in args.sizes or SIZES[problem]]
